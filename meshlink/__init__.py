@@ -1,0 +1,3 @@
+"""skimesh transport layer: Zenoh sessions, the key space and the anyio <-> Zenoh bridge."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""skimesh task layer: discovery, planning, multi-robot execution, verification."""
+
+__all__: list[str] = []

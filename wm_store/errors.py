@@ -1,0 +1,182 @@
+"""Errors of the world-model package. Every exception raised by ``wm_store`` derives from
+:class:`WmError`, so callers can catch the package as a whole.
+
+Hierarchy::
+
+    WmError
+    ├── OntologyError                  the ontology cannot be loaded or is inconsistent
+    │   ├── UnknownClassError          a class name the ontology does not define (suggests the closest)
+    │   ├── UnknownRelationError       a relation name the ontology does not define
+    │   ├── UnknownPropertyError       a data property name the ontology does not define
+    │   └── UnknownTemplateError       no default individual of that name
+    ├── ValidationError                a request is well-formed but breaks a rule; state unchanged
+    │   ├── RelationDomainError        subject or object of a relation has the wrong class
+    │   ├── TreeShapeError             a spatial relation would make a cycle or a second parent
+    │   ├── PropertyValueError         wrong kind of value, or out of the range the ontology states
+    │   ├── CardinalityError           more (or fewer) relations than the ontology allows
+    │   ├── ElementNotFoundError       no element with that id
+    │   ├── DuplicateIdError           an explicit id that is taken or was used before
+    │   └── ConflictError              compare-and-set failed: the element or store moved on
+    ├── ProtocolError                  bytes that do not decode to a request/reply of this schema
+    ├── HistoryCompactedError          changes-since asked for revisions no longer kept
+    ├── StorageError                   the durable log or a snapshot cannot be read or written
+    │   └── CorruptLogError            a record in the middle of the log fails its CRC
+    ├── TransportError                 the store cannot be reached (no reply, timeout, session closed)
+    └── RemoteError                    the store answered with an error (carries its code and message)
+
+Each error has a stable ``code`` (used on the wire in :class:`wm_store.protocol.ErrorReply`), and
+messages say what to do where that is known.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CardinalityError",
+    "ConflictError",
+    "CorruptLogError",
+    "DuplicateIdError",
+    "ElementNotFoundError",
+    "HistoryCompactedError",
+    "OntologyError",
+    "PropertyValueError",
+    "ProtocolError",
+    "RelationDomainError",
+    "RemoteError",
+    "StorageError",
+    "TransportError",
+    "TreeShapeError",
+    "UnknownClassError",
+    "UnknownPropertyError",
+    "UnknownRelationError",
+    "UnknownTemplateError",
+    "ValidationError",
+    "WmError",
+    "error_for_code",
+]
+
+
+class WmError(Exception):
+    """Root of every world-model error."""
+
+    code: str = "wm_error"
+
+
+class OntologyError(WmError):
+    code = "ontology_error"
+
+
+class UnknownClassError(OntologyError):
+    code = "unknown_class"
+
+
+class UnknownRelationError(OntologyError):
+    code = "unknown_relation"
+
+
+class UnknownPropertyError(OntologyError):
+    code = "unknown_property"
+
+
+class UnknownTemplateError(OntologyError):
+    code = "unknown_template"
+
+
+class ValidationError(WmError):
+    code = "validation_error"
+
+
+class RelationDomainError(ValidationError):
+    code = "relation_domain"
+
+
+class TreeShapeError(ValidationError):
+    code = "tree_shape"
+
+
+class PropertyValueError(ValidationError):
+    code = "property_value"
+
+
+class CardinalityError(ValidationError):
+    code = "cardinality"
+
+
+class ElementNotFoundError(ValidationError):
+    code = "not_found"
+
+
+class DuplicateIdError(ValidationError):
+    code = "duplicate_id"
+
+
+class ConflictError(ValidationError):
+    code = "conflict"
+
+
+class ProtocolError(WmError):
+    code = "protocol_error"
+
+
+class HistoryCompactedError(WmError):
+    code = "history_compacted"
+
+
+class StorageError(WmError):
+    code = "storage_error"
+
+
+class CorruptLogError(StorageError):
+    code = "corrupt_log"
+
+
+class TransportError(WmError):
+    code = "transport_error"
+
+
+class RemoteError(WmError):
+    """The store answered with an error. ``remote_code`` is the code of the error it raised."""
+
+    code = "remote_error"
+
+    def __init__(self, remote_code: str, message: str) -> None:
+        super().__init__(f"[{remote_code}] {message}")
+        self.remote_code = remote_code
+        self.message = message
+
+
+_BY_CODE: dict[str, type[WmError]] = {
+    cls.code: cls
+    for cls in (
+        WmError,
+        OntologyError,
+        UnknownClassError,
+        UnknownRelationError,
+        UnknownPropertyError,
+        UnknownTemplateError,
+        ValidationError,
+        RelationDomainError,
+        TreeShapeError,
+        PropertyValueError,
+        CardinalityError,
+        ElementNotFoundError,
+        DuplicateIdError,
+        ConflictError,
+        ProtocolError,
+        HistoryCompactedError,
+        StorageError,
+        CorruptLogError,
+        TransportError,
+    )
+}
+
+
+def error_for_code(code: str, message: str) -> WmError:
+    """Rebuild the local exception for an error code received from the store.
+
+    Known codes give their own class (so ``except ConflictError`` works across the wire);
+    unknown codes give a :class:`RemoteError` that keeps the code.
+    """
+    cls = _BY_CODE.get(code)
+    if cls is None:
+        return RemoteError(code, message)
+    return cls(message)
