@@ -1,3 +1,69 @@
-"""skimesh transport layer: Zenoh sessions, the key space and the anyio <-> Zenoh bridge."""
+"""skimesh transport layer: Zenoh sessions, the key space and the anyio <-> Zenoh bridge.
 
-__all__: list[str] = []
+Start with :func:`open_mesh` (a :class:`MeshConfig` in, a :class:`Mesh` out); keys come from
+``mesh.keys`` (:class:`KeySpace`). Every error derives from :class:`MeshlinkError`.
+"""
+
+from .config import (
+    DEFAULT_ROUTER_ENDPOINT,
+    MeshConfig,
+    Mode,
+    add_mesh_arguments,
+    check_endpoint,
+    mesh_config_from_args,
+    to_zenoh_config,
+)
+from .errors import (
+    ConfigError,
+    InvalidKeyError,
+    MeshlinkError,
+    NoReplyError,
+    RemoteError,
+    SessionError,
+)
+from .keys import KeySpace, check_name
+from .messages import (
+    Answer,
+    IncomingQuery,
+    Liveness,
+    MeshStatistics,
+    Reply,
+    Sample,
+    SubscriptionStatistics,
+)
+from .publish import MeshPublisher, MeshToken
+from .router import router_config, run_router
+from .session import Mesh, open_mesh
+from .subscription import Subscription
+
+__all__ = [
+    "DEFAULT_ROUTER_ENDPOINT",
+    "Answer",
+    "ConfigError",
+    "IncomingQuery",
+    "InvalidKeyError",
+    "KeySpace",
+    "Liveness",
+    "Mesh",
+    "MeshConfig",
+    "MeshPublisher",
+    "MeshStatistics",
+    "MeshToken",
+    "MeshlinkError",
+    "Mode",
+    "NoReplyError",
+    "RemoteError",
+    "Reply",
+    "Sample",
+    "SessionError",
+    "Subscription",
+    "SubscriptionStatistics",
+    "add_mesh_arguments",
+    "check_endpoint",
+    "check_name",
+    "mesh_config_from_args",
+    "open_mesh",
+    "router_config",
+    "run_router",
+    "to_zenoh_config",
+]

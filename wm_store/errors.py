@@ -5,12 +5,12 @@ Hierarchy::
 
     WmError
     ├── OntologyError                  the ontology cannot be loaded or is inconsistent
-    │   ├── UnknownClassError          a class name the ontology does not define (suggests the closest)
+    │   ├── UnknownClassError          a class the ontology does not define (names the closest)
     │   ├── UnknownRelationError       a relation name the ontology does not define
     │   ├── UnknownPropertyError       a data property name the ontology does not define
     │   └── UnknownTemplateError       no default individual of that name
-    ├── ValidationError                a request is well-formed but breaks a rule; state unchanged
-    │   ├── RelationDomainError        subject or object of a relation has the wrong class
+    ├── ValidationError                a request is well-formed but breaks a rule; nothing changes
+    │   ├── RelationDomainError        a relation's subject or object has the wrong class
     │   ├── TreeShapeError             a spatial relation would make a cycle or a second parent
     │   ├── PropertyValueError         wrong kind of value, or out of the range the ontology states
     │   ├── CardinalityError           more (or fewer) relations than the ontology allows
@@ -21,8 +21,8 @@ Hierarchy::
     ├── HistoryCompactedError          changes-since asked for revisions no longer kept
     ├── StorageError                   the durable log or a snapshot cannot be read or written
     │   └── CorruptLogError            a record in the middle of the log fails its CRC
-    ├── TransportError                 the store cannot be reached (no reply, timeout, session closed)
-    └── RemoteError                    the store answered with an error (carries its code and message)
+    ├── TransportError                 the store cannot be reached (no reply, timeout, closed)
+    └── RemoteError                    the store answered with an error (keeps its code)
 
 Each error has a stable ``code`` (used on the wire in :class:`wm_store.protocol.ErrorReply`), and
 messages say what to do where that is known.

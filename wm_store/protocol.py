@@ -22,9 +22,9 @@ from msgspec import Meta, Struct
 __all__ = [
     "SCHEMA_VERSION",
     "AddElement",
+    "Change",
     "ChangesReply",
     "ChangesSince",
-    "Change",
     "ClassDef",
     "ClassDefined",
     "Color",
@@ -45,8 +45,8 @@ __all__ = [
     "Op",
     "Orientation",
     "Parent",
-    "Position",
     "Pose",
+    "Position",
     "PropertyFilter",
     "Query",
     "Relation",
@@ -342,6 +342,8 @@ class Change(Struct, kw_only=True):
     stamp: float
     txn_id: str = ""
     author: str = ""
+    ids: dict[str, str] = {}
+    """Ids assigned to added elements, by the ``ref`` the writer gave them."""
     schema_version: int = SCHEMA_VERSION
 
 
@@ -430,15 +432,7 @@ class Info(Struct, tag=True, tag_field="request", kw_only=True):
 
 
 Request: TypeAlias = (
-    GetElements
-    | Resolve
-    | Relations
-    | Parent
-    | Sparql
-    | Transact
-    | Snapshot
-    | ChangesSince
-    | Info
+    GetElements | Resolve | Relations | Parent | Sparql | Transact | Snapshot | ChangesSince | Info
 )
 
 # --------------------------------------------------------------------------- replies
@@ -521,8 +515,8 @@ Reply: TypeAlias = (
 # Built once (msgspec perf tip); decoders are thread-safe.
 
 _encoder = msgspec.msgpack.Encoder()
-_request_decoder = msgspec.msgpack.Decoder(Request)  # type: ignore[arg-type]
-_reply_decoder = msgspec.msgpack.Decoder(Reply)  # type: ignore[arg-type]
+_request_decoder = msgspec.msgpack.Decoder(Request)
+_reply_decoder = msgspec.msgpack.Decoder(Reply)
 _change_decoder = msgspec.msgpack.Decoder(Change)
 
 
@@ -533,11 +527,11 @@ def encode(message: Any) -> bytes:
 
 def decode_request(data: bytes) -> Request:
     """Decode a request; raises ``msgspec.DecodeError`` / ``ValidationError`` on bad bytes."""
-    return _request_decoder.decode(data)  # type: ignore[no-any-return]
+    return _request_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
 
 
 def decode_reply(data: bytes) -> Reply:
-    return _reply_decoder.decode(data)  # type: ignore[no-any-return]
+    return _reply_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
 
 
 def decode_change(data: bytes) -> Change:

@@ -1,0 +1,164 @@
+"""Configuration of the embedded mobile manipulator and the names of its parts.
+
+Pure data: no MuJoCo import. :class:`RobotSpec` is what a scenario file sets (strict: unknown
+fields are an error, lengths must be positive); :func:`robot_layout` derives every element
+name the model builder creates, so drivers and IK never spell names by hand.
+
+Naming convention: every element of robot ``r1`` is called ``r1/<part>``, e.g. ``r1/elbow``
+(joint and its actuator), ``r1/tcp`` (site). The prefix is the robot name plus ``/``.
+
+Units: metres, kilograms, radians. Frames: the base frame has x forward, y left, z up, origin
+on the floor under the base centre.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, TypeAlias
+
+from msgspec import Meta, Struct
+
+__all__ = [
+    "ARM_JOINTS_6",
+    "ARM_JOINTS_7",
+    "RGBA",
+    "Pose2D",
+    "RobotLayout",
+    "RobotSpec",
+    "robot_layout",
+]
+
+Length = Annotated[float, Meta(gt=0, le=10, description="metres")]
+Mass = Annotated[float, Meta(gt=0, le=1000, description="kilograms")]
+Unit = Annotated[float, Meta(ge=0, le=1)]
+RGBA: TypeAlias = tuple[Unit, Unit, Unit, Unit]
+RobotName = Annotated[str, Meta(pattern=r"^[A-Za-z][A-Za-z0-9_-]*$", max_length=64)]
+
+#: Arm joints from the base outwards (6-DOF): pan (z), lift (y), elbow (y), then a spherical
+#: roll (z) - pitch (y) - roll (z) wrist whose axes meet at the wrist centre.
+ARM_JOINTS_6: tuple[str, ...] = (
+    "shoulder_pan",
+    "shoulder_lift",
+    "elbow",
+    "wrist_roll",
+    "wrist_pitch",
+    "tool_roll",
+)
+#: The 7-DOF arm adds an upper-arm roll (z) between the shoulder lift and the elbow.
+ARM_JOINTS_7: tuple[str, ...] = (
+    "shoulder_pan",
+    "shoulder_lift",
+    "upper_arm_roll",
+    "elbow",
+    "wrist_roll",
+    "wrist_pitch",
+    "tool_roll",
+)
+
+
+class Pose2D(Struct, frozen=True, forbid_unknown_fields=True):
+    """A planar pose in the world frame: ``x``, ``y`` in metres, ``yaw`` in radians about +z."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+
+
+class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
+    """A small holonomic mobile manipulator.
+
+    Defaults: a 0.60 x 0.45 m base whose deck (top) is 0.35 m above the floor, a 6-DOF arm whose
+    shoulder is 0.65 m high above the front of the deck (reach shoulder → tcp 0.88 m; with the
+    gripper pointing down at 0.75 m height, up to 0.5 m beyond the front edge), and a parallel
+    gripper opening to 85 mm. It picks a 4-6 cm part from a 0.7 m table in front and drops it
+    into a kit box on the rear half of its deck.
+    """
+
+    name: RobotName = "robot"
+    """Robot name; element names are prefixed ``<name>/``."""
+    base_length: Length = 0.60
+    """Footprint along the base x axis (forward), m."""
+    base_width: Length = 0.45
+    """Footprint along the base y axis, m."""
+    base_height: Length = 0.35
+    """Height of the deck (top of the base) above the floor, m."""
+    base_mass: Mass = 40.0
+    arm_dof: Literal[6, 7] = 6
+    arm_mount_x: Annotated[float, Meta(ge=-5, le=5)] = 0.17
+    """Arm mount on the deck, along the base x axis from the base centre, m."""
+    pedestal_height: Length = 0.20
+    """Deck to the shoulder-pan joint, m."""
+    shoulder_height: Length = 0.10
+    """Shoulder-pan joint to the shoulder-lift axis, m."""
+    upper_arm_length: Length = 0.38
+    """Shoulder-lift axis to elbow axis, m."""
+    forearm_length: Length = 0.32
+    """Elbow axis to wrist centre (where the wrist axes meet), m."""
+    wrist_length: Length = 0.07
+    """Wrist centre to the gripper flange, m."""
+    gripper_length: Length = 0.11
+    """Gripper flange to the tool centre point (middle of the finger pads), m."""
+    link_radius: Length = 0.035
+    arm_mass: Mass = 3.5
+    """Whole arm without gripper, spread over the links by length."""
+    gripper_mass: Mass = 0.6
+    gripper_max_opening: Length = 0.085
+    """Distance between the finger pads when fully open, m."""
+    gripper_force: Annotated[float, Meta(gt=0, le=500)] = 40.0
+    """Largest squeeze force of each finger, N."""
+    base_rgba: RGBA = (0.25, 0.27, 0.30, 1.0)
+    deck_rgba: RGBA = (0.55, 0.57, 0.60, 1.0)
+    arm_rgba: RGBA = (0.90, 0.55, 0.10, 1.0)
+    gripper_rgba: RGBA = (0.20, 0.20, 0.22, 1.0)
+    pad_rgba: RGBA = (0.10, 0.60, 0.30, 1.0)
+
+    @property
+    def prefix(self) -> str:
+        """``<name>/``: the prefix of every element of this robot."""
+        return f"{self.name}/"
+
+
+class RobotLayout(Struct, frozen=True):
+    """Full element names of one robot in a MuJoCo model (see :func:`robot_layout`)."""
+
+    prefix: str
+    base_joints: tuple[str, str, str]
+    """x slide, y slide, yaw hinge; their values are the base pose in the world frame."""
+    arm_joints: tuple[str, ...]
+    finger_joints: tuple[str, str]
+    """Left (+y) and right (-y) finger slides, 0 = closed, each opens to max_opening / 2."""
+    gripper_actuator: str
+    """Position servo on the opening (pad-to-pad distance, m), through a fixed tendon."""
+    tcp_site: str
+    """Tool centre point: z along the approach direction, y along the finger closing axis."""
+    base_site: str
+    """On the floor under the base centre, oriented like the base."""
+    deck_site: str
+    """Centre of the free rear part of the deck, on its surface: where a kit box goes."""
+    camera_sites: tuple[str, ...]
+    """Sites (and cameras) of the same name: front camera on the base, wrist camera."""
+    pad_geoms: tuple[str, str]
+    """Left and right finger pad geoms (for "both pads touch" grasp checks)."""
+
+    @property
+    def servo_joints(self) -> tuple[str, ...]:
+        """Joints with a position servo of the same name: base, then arm."""
+        return self.base_joints + self.arm_joints
+
+
+def robot_layout(spec: RobotSpec, prefix: str | None = None) -> RobotLayout:
+    """The names :func:`device_drivers.robot_model.build_robot` gives robot ``spec.name``
+    (with ``prefix``, default ``spec.prefix``)."""
+    p = spec.prefix if prefix is None else prefix
+    arm = ARM_JOINTS_6 if spec.arm_dof == 6 else ARM_JOINTS_7
+    return RobotLayout(
+        prefix=p,
+        base_joints=(f"{p}base_x", f"{p}base_y", f"{p}base_yaw"),
+        arm_joints=tuple(p + j for j in arm),
+        finger_joints=(f"{p}left_finger", f"{p}right_finger"),
+        gripper_actuator=f"{p}gripper",
+        tcp_site=f"{p}tcp",
+        base_site=f"{p}base_site",
+        deck_site=f"{p}deck",
+        camera_sites=(f"{p}front_camera", f"{p}wrist_camera"),
+        pad_geoms=(f"{p}left_pad", f"{p}right_pad"),
+    )

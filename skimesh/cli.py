@@ -1,0 +1,46 @@
+"""The ``skimesh`` command: one entry point for every service and tool.
+
+Run ``skimesh --help`` for the list; every sub-command has its own ``--help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from .commands import demo, router, wm
+from .runtime import configure_logging
+
+__all__ = ["build_parser", "main"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="skimesh",
+        description="skimesh: a Zenoh-distributed multi-robot skill mesh. Start with "
+        "`skimesh demo`; run services on several hosts with `router`, `wm`, ... and "
+        "`--connect tcp/HOST:7447`.",
+    )
+    parser.add_argument(
+        "-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)"
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    router.add_parser(sub)
+    wm.add_parser(sub)
+    demo.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    configure_logging(args.verbose)
+    try:
+        return int(args.func(args))
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

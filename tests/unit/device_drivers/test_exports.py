@@ -1,0 +1,41 @@
+"""Every name in an ``__all__`` of the device layer exists (anyio's test_all_attributes idea)."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+
+MODULES = [
+    "device_drivers",
+    "device_drivers.errors",
+    "device_drivers.gripper_model",
+    "device_drivers.ik",
+    "device_drivers.ik_dls",
+    "device_drivers.ik_placo",
+    "device_drivers.placo_export",
+    "device_drivers.robot_model",
+    "device_drivers.robot_spec",
+    "device_drivers.sim_health",
+    "device_drivers.sim_state",
+]
+
+
+@pytest.mark.parametrize("module_name", MODULES)
+def test_all_names_exist(module_name: str) -> None:
+    module = importlib.import_module(module_name)
+    missing = [name for name in module.__all__ if not hasattr(module, name)]
+    assert missing == []
+    assert sorted(module.__all__) == sorted(set(module.__all__))
+
+
+def test_package_import_is_pure() -> None:
+    """The package root re-exports only the pure core: importing it pulls no placo."""
+    code = "import device_drivers, sys; print('placo' in sys.modules, 'mujoco' in sys.modules)"
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd="."
+    )
+    assert out.stdout.split() == ["False", "False"]

@@ -1,0 +1,45 @@
+"""RobotSpec is strict config; robot_layout spells every element name."""
+
+from __future__ import annotations
+
+import msgspec
+import pytest
+
+from device_drivers.robot_spec import ARM_JOINTS_6, ARM_JOINTS_7, Pose2D, RobotSpec, robot_layout
+
+
+def test_defaults_decode_from_empty_table() -> None:
+    assert msgspec.convert({}, RobotSpec) == RobotSpec()
+    assert msgspec.convert({"x": 1.0, "yaw": 0.5}, Pose2D) == Pose2D(1.0, 0.0, 0.5)
+
+
+@pytest.mark.parametrize(
+    ("fields", "needle"),
+    [
+        ({"base_heigth": 0.3}, "unknown field"),
+        ({"base_height": -0.3}, "base_height"),
+        ({"upper_arm_length": 0.0}, "upper_arm_length"),
+        ({"arm_dof": 5}, "arm_dof"),
+        ({"name": "r 1"}, "name"),
+        ({"arm_rgba": [1.0, 0.0, 0.0, 2.0]}, "arm_rgba"),
+    ],
+)
+def test_bad_config_is_rejected(fields: dict[str, object], needle: str) -> None:
+    with pytest.raises(msgspec.ValidationError, match=needle):
+        msgspec.convert(fields, RobotSpec)
+
+
+def test_layout_names_are_prefixed() -> None:
+    names = robot_layout(RobotSpec(name="r1"))
+    assert names.prefix == "r1/"
+    assert names.base_joints == ("r1/base_x", "r1/base_y", "r1/base_yaw")
+    assert names.arm_joints == tuple(f"r1/{j}" for j in ARM_JOINTS_6)
+    assert names.tcp_site == "r1/tcp"
+    assert names.gripper_actuator == "r1/gripper"
+    assert names.servo_joints == names.base_joints + names.arm_joints
+
+
+def test_layout_seven_dof_and_custom_prefix() -> None:
+    names = robot_layout(RobotSpec(name="r2", arm_dof=7), prefix="")
+    assert names.arm_joints == ARM_JOINTS_7
+    assert names.pad_geoms == ("left_pad", "right_pad")

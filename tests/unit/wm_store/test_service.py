@@ -1,0 +1,145 @@
+"""WmService: every bad input gets an error reply naming the problem; the state is unchanged."""
+
+from __future__ import annotations
+
+import anyio
+import msgspec
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from wm_store.ontology import Ontology
+from wm_store.protocol import (
+    AddElement,
+    ChangesSince,
+    ElementsReply,
+    ErrorReply,
+    GetElements,
+    Info,
+    InfoReply,
+    Query,
+    Relation,
+    Relations,
+    RelationsReply,
+    Resolve,
+    Transact,
+    TransactReply,
+    decode_reply,
+    encode,
+)
+from wm_store.service import WmService
+from wm_store.store import WmStore
+
+pytestmark = pytest.mark.anyio
+
+
+async def make_service(ontology: Ontology) -> WmService:
+    store = await WmStore.open(ontology)
+    service = WmService(store, max_request_bytes=64 * 1024)
+    reply = await service.handle(
+        Transact(
+            ops=[
+                AddElement(type="Box", ref="$b"),
+                AddElement(type="Gear", relations=[Relation("$b", "contain", "$")]),
+            ]
+        )
+    )
+    assert isinstance(reply, TransactReply)
+    return service
+
+
+async def call(service: WmService, data: bytes) -> tuple[object, bool]:
+    out, ok = await service.handle_bytes(data)
+    return decode_reply(out), ok
+
+
+async def test_good_requests(ontology: Ontology) -> None:
+    service = await make_service(ontology)
+    reply, ok = await call(service, encode(GetElements(ids=["Gear-1"])))
+    assert ok and isinstance(reply, ElementsReply) and reply.elements[0].type == "Gear"
+    reply, ok = await call(service, encode(Resolve(query=Query(type="Part"))))
+    assert isinstance(reply, ElementsReply) and [e.id for e in reply.elements] == ["Gear-1"]
+    reply, ok = await call(service, encode(Relations(predicate="contain")))
+    assert isinstance(reply, RelationsReply) and reply.relations == [
+        Relation("Box-1", "contain", "Gear-1")
+    ]
+    reply, ok = await call(service, encode(Info()))
+    assert isinstance(reply, InfoReply) and reply.revision == 1 and reply.elements == 2
+
+
+@pytest.mark.parametrize(
+    ("data", "code", "words"),
+    [
+        (b"", "protocol_error", "malformed"),
+        (b"\xc1\xff\x00garbage", "protocol_error", "malformed"),
+        (msgspec.msgpack.encode({"request": "Nope"}), "protocol_error", "Nope"),
+        (msgspec.msgpack.encode({"request": "GetElements", "ids": 5}), "protocol_error", "ids"),
+        (encode(GetElements(ids=["Gear-99"])), "not_found", "Gear-99"),
+        (encode(Resolve(query=Query(type="Gaer"))), "unknown_class", "Gear"),
+        (
+            encode(Transact(ops=[AddElement(type="Gear", properties={"mass": "x"})])),
+            "property_value",
+            "mass",
+        ),
+        (encode(ChangesSince(revision=50)), "conflict", "ahead"),
+        (b"\x00" * (70 * 1024), "protocol_error", "limit"),
+    ],
+)
+async def test_bad_input_gets_named_error(
+    ontology: Ontology, data: bytes, code: str, words: str
+) -> None:
+    service = await make_service(ontology)
+    before = service.store.snapshot()
+    reply, ok = await call(service, data)
+    assert not ok
+    assert isinstance(reply, ErrorReply)
+    assert reply.code == code
+    assert words in reply.message
+    assert service.store.snapshot() == before
+
+
+@settings(
+    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.binary(max_size=512))
+def test_fuzzed_bytes_never_crash_or_change_state(ontology: Ontology, data: bytes) -> None:
+    async def check() -> None:
+        service = await make_service(ontology)
+        before = service.store.snapshot()
+        reply, ok = await call(service, data)
+        assert (
+            isinstance(
+                reply, ErrorReply | ElementsReply | RelationsReply | InfoReply | TransactReply
+            )
+            or ok
+        )
+        if not ok:
+            assert service.store.snapshot() == before
+
+    anyio.run(check)
+
+
+@settings(
+    max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    payload=st.dictionaries(
+        st.sampled_from(["request", "ids", "query", "ops", "revision", "type", "op"]),
+        st.one_of(
+            st.sampled_from(["GetElements", "Resolve", "Transact", "AddElement", "Info", "Gear"]),
+            st.integers(min_value=-(2**63), max_value=2**63 - 1),
+            st.lists(st.text(max_size=5), max_size=3),
+            st.none(),
+        ),
+    )
+)
+def test_fuzzed_structured_requests(ontology: Ontology, payload: dict[str, object]) -> None:
+    async def check() -> None:
+        service = await make_service(ontology)
+        before = service.store.snapshot()
+        reply, ok = await call(service, msgspec.msgpack.encode(payload))
+        if not ok:
+            assert isinstance(reply, ErrorReply) and reply.message
+            assert service.store.snapshot() == before
+
+    anyio.run(check)

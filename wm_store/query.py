@@ -1,0 +1,145 @@
+"""Read queries over a :class:`~wm_store.state.SceneState`, shared by the store and the replica.
+
+``resolve`` finds elements matching a partial description (:class:`~wm_store.protocol.Query`):
+type with subclasses, label, property filters and relations they take part in. It starts from
+the smallest index it can (label, related element, type) and filters the candidates; it never
+scans the graph when an index applies, and it never goes through SPARQL.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from .ontology import Ontology
+from .protocol import Element, Pose, Position, PropertyFilter, Query, Relation, Value
+from .state import SceneState, parse_id
+
+__all__ = ["id_sort_key", "match_relations", "resolve"]
+
+WILDCARD = "*"
+SELF = "?"
+
+
+def id_sort_key(element_id: str) -> tuple[str, int, str]:
+    """Natural order of ids: ``Part-2`` before ``Part-10``."""
+    parsed = parse_id(element_id)
+    return (parsed[0], parsed[1], "") if parsed else (element_id, 0, element_id)
+
+
+def resolve(state: SceneState, ontology: Ontology, query: Query, limit: int = 0) -> list[Element]:
+    """Elements matching ``query``, in natural id order, at most ``limit`` (0: all).
+
+    Raises :class:`~wm_store.errors.UnknownClassError` / ``UnknownRelationError`` for names the
+    ontology does not know, so a misspelt query fails instead of matching nothing.
+    """
+    candidates: set[str] | None = None
+    if query.label:
+        candidates = state.ids_with_label(query.label)
+    for rel in query.related:
+        ontology.relation(rel.predicate)
+        found = _ids_related(state, ontology, rel)
+        candidates = found if candidates is None else candidates & found
+    if query.type:
+        cls = ontology.check_class(query.type)
+        types = (cls,) if query.exact_type else ontology.subclasses(cls)
+        if candidates is None:
+            candidates = state.ids_of_types(types)
+        else:
+            typeset = set(types)
+            candidates = {i for i in candidates if state.elements[i].type in typeset}
+    if candidates is None:
+        candidates = set(state.elements)
+    checks = [_compile_filter(f) for f in query.filters]
+    for f in query.filters:
+        ontology.data_property(f.property)
+    elements = state.elements
+    matches = [elements[i] for i in candidates if all(check(elements[i]) for check in checks)]
+    matches.sort(key=lambda e: id_sort_key(e.id))
+    return matches[:limit] if limit else matches
+
+
+def _ids_related(state: SceneState, ontology: Ontology, rel: Relation) -> set[str]:
+    preds = ontology.subproperties(rel.predicate)
+    if rel.subject == SELF and rel.object == SELF:
+        return {r.subject for r in state.match_relations("", preds) if r.subject == r.object}
+    if rel.subject == SELF:
+        obj = "" if rel.object == WILDCARD else rel.object
+        return {r.subject for r in state.match_relations("", preds, obj)}
+    if rel.object == SELF:
+        subject = "" if rel.subject == WILDCARD else rel.subject
+        return {r.object for r in state.match_relations(subject, preds)}
+    raise ValueError(f"a related pattern needs '?' as subject or object: {rel}")
+
+
+def match_relations(
+    state: SceneState,
+    ontology: Ontology,
+    subject: str = "",
+    predicate: str = "",
+    obj: str = "",
+    *,
+    include_subproperties: bool = True,
+) -> list[Relation]:
+    """Relations matching the pattern (empty or ``"*"`` is a wildcard), in a stable order."""
+    subject = "" if subject == WILDCARD else subject
+    obj = "" if obj == WILDCARD else obj
+    preds: Iterable[str] | None = None
+    if predicate and predicate != WILDCARD:
+        ontology.relation(predicate)
+        preds = ontology.subproperties(predicate) if include_subproperties else (predicate,)
+    rels = list(state.match_relations(subject, preds, obj))
+    rels.sort(key=lambda r: (id_sort_key(r.subject), r.predicate, id_sort_key(r.object)))
+    return rels
+
+
+_ORDER: dict[str, Callable[[Any, Any], bool]] = {
+    "lt": operator.lt,
+    "le": operator.le,
+    "gt": operator.gt,
+    "ge": operator.ge,
+}
+
+
+def _compile_filter(f: PropertyFilter) -> Callable[[Element], bool]:
+    name, op, want = f.property, f.op, f.value
+    if op == "exists":
+        return lambda e: name in e.properties
+    if op == "eq":
+        return lambda e: name in e.properties and e.properties[name] == want
+    if op == "ne":
+        return lambda e: e.properties.get(name) != want
+    if op == "near":
+        tol = f.tolerance
+        return lambda e: _distance(e.properties.get(name), want) <= tol
+    compare = _ORDER[op]
+
+    def ordered(e: Element) -> bool:
+        have = e.properties.get(name)
+        if have is None or isinstance(have, bool) or not isinstance(have, int | float | str):
+            return False
+        try:
+            return compare(have, want)
+        except TypeError:
+            return False
+
+    return ordered
+
+
+def _distance(a: Value, b: Value) -> float:
+    if isinstance(a, int | float) and isinstance(b, int | float):
+        return abs(float(a) - float(b))
+    pa, pb = _as_position(a), _as_position(b)
+    if pa is None or pb is None:
+        return math.inf
+    return math.dist((pa.x, pa.y, pa.z), (pb.x, pb.y, pb.z))
+
+
+def _as_position(v: Value) -> Position | None:
+    if isinstance(v, Position):
+        return v
+    if isinstance(v, Pose):
+        return v.position
+    return None
