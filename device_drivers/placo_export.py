@@ -2,10 +2,13 @@
 
 Fixes applied to ``MjSpec.to_xml()`` output (measured with placo 0.10.2):
 
-- ``<keyframe>`` is removed (the parser rejects keyframes), and so are the elements IK does not
-  need (actuators, tendons, equalities, contact excludes/pairs, sensors).
-- ``<frame>`` elements (which ``MjSpec.attach`` writes) are flattened into their children: the
-  parser skips frame contents.
+- Keyframes are removed (the parser rejects them), and so are the elements IK does not need
+  (actuators, tendons, equalities, contact excludes/pairs, sensors, lights, cameras).
+- Static (joint-less) bodies are fused into their parents (``MjSpec.fuse_static``): the parser
+  places a site in a static body nested in another static body wrong (it keeps only the last
+  body's offset; seen with the Robotiq 2F-85's ``pinch`` site on a UR5e, 0.3 m off).
+- ``<frame>`` elements (which ``MjSpec.attach`` and ``fuse_static`` write) are flattened into
+  their children: the parser skips frame contents.
 - The robot is wrapped in an identity root body ``ik_root`` with a free joint. The parser
   ignores the root body's own pose, and placo's kinematics solver assumes the first 6 velocity
   DOFs are a floating base: it applies joint limits only to DOFs 6.., so a fixed-base model
@@ -36,7 +39,17 @@ __all__ = ["IK_ROOT", "load_placo_robot", "placo_mjcf"]
 IK_ROOT = "ik_root"
 """Name of the wrapper body and its free joint in the exported model."""
 
-_DROPPED_SECTIONS = ("keyframe", "actuator", "tendon", "equality", "contact", "sensor")
+_DROPPED = (
+    "keys",
+    "actuators",
+    "tendons",
+    "equalities",
+    "excludes",
+    "pairs",
+    "sensors",
+    "lights",
+    "cameras",
+)
 _POSED = ("body", "geom", "site", "camera", "light")
 FloatArray: TypeAlias = npt.NDArray[np.float64]
 
@@ -48,18 +61,23 @@ def placo_mjcf(robot: mujoco.MjSpec, *, keep_meshes: bool = False) -> str:
     compile or has no body.
     """
     spec = robot.copy()
+    for kind in _DROPPED:  # actuators before the tendons they drive
+        for element in list(getattr(spec, kind)):
+            spec.delete(element)
     spec.compiler.savecompiled = True  # poses as compiled: pos + quat, no euler/fromto
     try:
+        if spec.fuse_static() < 0:  # static bodies → frames (flattened below)
+            raise ValueError("mjs_fuseStatic failed")
         root = ET.fromstring(spec.to_xml())
     except ValueError as exc:
         raise ModelError(f"cannot export for placo: {exc}", source=spec.modelname) from exc
-    for tag in _DROPPED_SECTIONS:
-        for section in root.findall(tag):
-            root.remove(section)
+    for size in root.findall("size"):  # may still count the deleted keyframes
+        root.remove(size)
     worldbody = root.find("worldbody")
+    if worldbody is not None:
+        _flatten_frames(worldbody)
     if worldbody is None or worldbody.find("body") is None:
-        raise ModelError("the model has no body to export", source=spec.modelname)
-    _flatten_frames(worldbody)
+        raise ModelError("the model has no moving body to export", source=spec.modelname)
     if not keep_meshes:
         _drop_meshes(root)
     wrapper = ET.Element("body", {"name": IK_ROOT})

@@ -25,7 +25,7 @@ values are absolute world coordinates and :func:`mujoco.mj_resetData` puts it at
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjSpec objects are Any
 import numpy as np
@@ -119,35 +119,40 @@ def build_robot(
     # Arm: link lengths along +z at joint value 0.
     top = spec.base_height + spec.pedestal_height
     link = base.add_body(name=f"{p}shoulder_link", pos=[spec.arm_mount_x, 0, top])
+    chain = [link]
     _joint(link, f"{p}shoulder_pan", [0, 0, 1])
-    _link_geom(link, spec.shoulder_height, 1.5 * spec.link_radius, spec, spec.arm_rgba, _CYLINDER)
+    _link_geom(link, spec.shoulder_height, 1.5 * spec.link_radius, spec, _CYLINDER)
     link = link.add_body(name=f"{p}upper_arm", pos=[0, 0, spec.shoulder_height])
+    chain.append(link)
     _joint(link, f"{p}shoulder_lift", [0, 1, 0])
     upper = spec.upper_arm_length
     if spec.arm_dof == 7:
-        _link_geom(link, upper / 2, spec.link_radius, spec, spec.arm_rgba)
+        _link_geom(link, upper / 2, spec.link_radius, spec)
         link = link.add_body(name=f"{p}upper_arm_2", pos=[0, 0, upper / 2])
+        chain.append(link)
         _joint(link, f"{p}upper_arm_roll", [0, 0, 1])
         upper /= 2
-    _link_geom(link, upper, spec.link_radius, spec, spec.arm_rgba)
+    _link_geom(link, upper, spec.link_radius, spec)
     link = link.add_body(name=f"{p}forearm", pos=[0, 0, upper])
+    chain.append(link)
     _joint(link, f"{p}elbow", [0, 1, 0])
     fore = spec.forearm_length - _WRIST_ROLL_OFFSET
-    _link_geom(link, fore, 0.9 * spec.link_radius, spec, spec.arm_rgba)
+    _link_geom(link, fore, 0.9 * spec.link_radius, spec)
     link = link.add_body(name=f"{p}wrist_roll_link", pos=[0, 0, fore])
+    chain.append(link)
     _joint(link, f"{p}wrist_roll", [0, 0, 1])
-    _link_geom(link, _WRIST_ROLL_OFFSET, 0.8 * spec.link_radius, spec, spec.arm_rgba, _CYLINDER)
+    _link_geom(link, _WRIST_ROLL_OFFSET, 0.8 * spec.link_radius, spec, _CYLINDER)
     link = link.add_body(name=f"{p}wrist_pitch_link", pos=[0, 0, _WRIST_ROLL_OFFSET])
+    chain.append(link)
     _joint(link, f"{p}wrist_pitch", [0, 1, 0])
-    _link_geom(link, _TOOL_ROLL_OFFSET, 0.8 * spec.link_radius, spec, spec.arm_rgba)
+    _link_geom(link, _TOOL_ROLL_OFFSET, 0.8 * spec.link_radius, spec)
     hand = link.add_body(name=f"{p}gripper", pos=[0, 0, _TOOL_ROLL_OFFSET])
+    chain.append(hand)
     _joint(hand, f"{p}tool_roll", [0, 0, 1])
     add_parallel_gripper(mj, hand, spec, p, flange_z=spec.wrist_length - _TOOL_ROLL_OFFSET)
     # Links two apart overlap at the short wrist links; MuJoCo only skips parent-child pairs.
-    chain = [b.name for b in mj.bodies if b.name.startswith(p)][3:]  # from shoulder_link on
-    chain = chain[: chain.index(hand.name) + 1]
     for near, far in zip(chain, chain[2:], strict=False):
-        mj.add_exclude(bodyname1=near, bodyname2=far)
+        mj.add_exclude(bodyname1=near.name, bodyname2=far.name)
 
     for jname in names.servo_joints:
         _add_servo(mj, jname, jname.removeprefix(p))
@@ -170,19 +175,18 @@ def _joint(body: mujoco.MjsBody, name: str, axis: list[float]) -> None:
 
 
 def _link_geom(
-    body: mujoco.MjsBody,
-    length: float,
-    radius: float,
-    spec: RobotSpec,
-    rgba: Sequence[float],
-    kind: int = _CAPSULE,
+    body: mujoco.MjsBody, length: float, radius: float, spec: RobotSpec, kind: int = _CAPSULE
 ) -> None:
     """A link from the body origin along +z; mass is a share of ``spec.arm_mass`` by length."""
     reach = spec.shoulder_height + spec.upper_arm_length + spec.forearm_length + spec.wrist_length
     mass = max(spec.arm_mass * length / reach, 0.05)
     end = length if kind == _CAPSULE else length - 0.005
     body.add_geom(
-        type=kind, fromto=[0, 0, 0, 0, 0, end], size=[radius, 0, 0], rgba=list(rgba), mass=mass
+        type=kind,
+        fromto=[0, 0, 0, 0, 0, end],
+        size=[radius, 0, 0],
+        rgba=list(spec.arm_rgba),
+        mass=mass,
     )
 
 
@@ -272,20 +276,22 @@ def _check_compiles(mj: mujoco.MjSpec, what: str) -> None:
 def build_world(
     robots: Sequence[tuple[RobotSpec, Pose2D]],
     *,
-    extras: Sequence[mujoco.MjSpec] = (),
+    extras: Mapping[str, mujoco.MjSpec] | None = None,
     floor_size: float = 10.0,
 ) -> mujoco.MjSpec:
-    """One world: a floor (``floor``, half size ``floor_size`` m), a light, each robot at its
-    initial base pose, then each of ``extras`` (scene specs such as tables and parts, in world
-    coordinates) attached at the world origin with the prefix ``<extra.modelname>/``.
+    """One world: a floor (geom ``floor``, half size ``floor_size`` m), a light, each robot at
+    its initial base pose, then each spec of ``extras`` (tables, shelves, parts..., in world
+    coordinates) attached at the world origin with the prefix ``<key>/``.
 
-    Robots keep the names of :func:`robot_layout`; robot names must be unique.
-    Raises :class:`ModelError` on a duplicate name or if the world does not compile.
+    Robots keep the names of :func:`robot_layout`. An extra should author no physics options,
+    or the same as :func:`configure_physics` (MuJoCo warns about conflicting ones). The extras
+    are attached by reference: they cannot be attached again. Raises :class:`ModelError` on a
+    name used twice or if the world does not compile.
     """
-    names = [spec.name for spec, _ in robots]
+    names = [spec.name for spec, _ in robots] + list(extras or {})
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
-        raise ModelError(f"robot names must be unique, repeated: {dupes}", source="world")
+        raise ModelError(f"robot and extra names must be unique, repeated: {dupes}", source="world")
     world = mujoco.MjSpec()
     world.modelname = "skimesh_world"
     configure_physics(world)
@@ -301,7 +307,7 @@ def build_world(
     for spec, pose in robots:
         frame = world.worldbody.add_frame()
         world.attach(build_robot(spec, "", at=pose), frame=frame, prefix=spec.prefix)
-    for extra in extras:
-        world.attach(extra, frame=world.worldbody.add_frame(), prefix=extra.modelname + "/")
+    for name, extra in (extras or {}).items():
+        world.attach(extra, frame=world.worldbody.add_frame(), prefix=f"{name}/")
     _check_compiles(world, "world")
     return world

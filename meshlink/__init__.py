@@ -33,6 +33,7 @@ from .messages import (
 )
 from .publish import MeshPublisher, MeshToken
 from .router import router_config, run_router
+from .serving import Handler
 from .session import Mesh, open_mesh
 from .subscription import Subscription
 
@@ -40,6 +41,7 @@ __all__ = [
     "DEFAULT_ROUTER_ENDPOINT",
     "Answer",
     "ConfigError",
+    "Handler",
     "IncomingQuery",
     "InvalidKeyError",
     "KeySpace",

@@ -13,16 +13,17 @@ to a list or deque and, at most, schedules one wake-up of the loop:
   where Zenoh's network thread must take the GIL for every sample.
 
 Loop hand-off (:class:`LoopPort`): ``anyio.lowlevel.current_token()`` is taken when the mesh
-opens and work is handed over with ``token.backend_class.run_sync_soon``, anyio's own
-non-blocking "call this in that loop" (``loop.call_soon_threadsafe`` on asyncio, the trio token
-on trio). ``anyio.from_thread.run_sync`` would block Zenoh's thread until the loop ran the
-call, so it is not used. A hand-off after the loop finished is ignored, never raised into
+opens and work is handed over with the native loop's non-blocking thread-safe call
+(``loop.call_soon_threadsafe`` on asyncio, ``TrioToken.run_sync_soon`` on trio).
+``anyio.from_thread.run_sync`` would block Zenoh's thread until the loop ran the call, so it is
+not used. A hand-off after the loop finished is ignored, never raised into
 Zenoh's thread. Coalescing (:class:`Inbox`): at most one wake-up is scheduled until the
 consumer drains the deque (one ``call_soon_threadsafe`` per sample caps near 40k msgs/s).
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
 import threading
@@ -79,20 +80,26 @@ class LoopPort:
     """Non-blocking hand-off from any thread into the event loop that built this object.
 
     Build it inside the loop (needs a running anyio loop); call :meth:`call_soon` anywhere.
+    The anyio token's native object is the asyncio loop (``call_soon_threadsafe``) or trio's
+    token (``run_sync_soon``); anyio's own ``AsyncBackend.run_sync_soon`` is newer than the
+    anyio 4.11 this project supports, and copies a context per call.
     """
 
-    __slots__ = ("_backend", "_native")
+    __slots__ = ("_call",)
 
     def __init__(self) -> None:
-        token = anyio.lowlevel.current_token()
-        self._backend: type[anyio.abc.AsyncBackend] = token.backend_class
-        self._native: object = token.native_token
+        native = anyio.lowlevel.current_token().native_token
+        if isinstance(native, asyncio.AbstractEventLoop):
+            self._call: Callable[[Callable[[], object]], object] = native.call_soon_threadsafe
+        else:
+            trio_token: Any = native  # trio.lowlevel.TrioToken; trio is no dependency here
+            self._call = trio_token.run_sync_soon
 
     def call_soon(self, fn: Callable[[], object]) -> bool:
         """Schedule ``fn()`` in the loop; never blocks. False if the loop has finished."""
         try:
-            self._backend.run_sync_soon(fn, (), self._native)
-        except (anyio.RunFinishedError, RuntimeError):
+            self._call(fn)
+        except RuntimeError:  # asyncio: loop closed; trio.RunFinishedError is a RuntimeError
             return False
         return True
 
@@ -250,7 +257,7 @@ async def run_query(
     selector: str,
     payload: bytes | None,
     *,
-    timeout: float,  # noqa: ASYNC109 - Zenoh's own query timeout, passed on to session.get
+    timeout: float,
     target: zenoh.QueryTarget,
     port: LoopPort,
     in_flight: Counter,

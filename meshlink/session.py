@@ -79,7 +79,7 @@ class Mesh:
         key_expr: str,
         payload: bytes | None = None,
         *,
-        timeout: float = 5.0,  # noqa: ASYNC109 - Zenoh's query timeout, enforced by Zenoh
+        timeout: float = 5.0,
     ) -> list[Reply]:
         """Query every matching queryable; return all replies once Zenoh has them all (each
         server dropped its query), or those received when ``timeout`` seconds passed (Zenoh's
@@ -99,7 +99,7 @@ class Mesh:
         key_expr: str,
         payload: bytes,
         *,
-        timeout: float = 5.0,  # noqa: ASYNC109 - Zenoh's query timeout, enforced by Zenoh
+        timeout: float = 5.0,
     ) -> bytes:
         """Send one request to the best matching server and return its reply payload as soon
         as it arrives (further replies are ignored).
@@ -121,7 +121,7 @@ class Mesh:
         self,
         key_expr: str,
         payload: bytes | None,
-        timeout: float,  # noqa: ASYNC109 - see get()
+        timeout: float,
         first_only: bool = False,
     ) -> list[zenoh.Reply]:
         _check_timeout(timeout)

@@ -53,6 +53,7 @@ from wm_store.ontology_model import (
     did_you_mean,
     kind_of,
     typed_problem,
+    with_article,
 )
 from wm_store.ontology_model import CardinalityRestriction as CardinalityRestriction
 from wm_store.ontology_model import CardinalityShortfall as CardinalityShortfall
@@ -558,7 +559,8 @@ class Ontology:
         up = self._up(cls)
         if info.domains and up.isdisjoint(info.domains):
             raise PropertyValueError(
-                f"property '{name}' does not apply to a {cls}: it is for {_one_of(info.domains)}"
+                f"property '{name}' does not apply to {with_article(cls)}: "
+                f"it is for {_one_of(info.domains)}"
             )
         self.check_value(name, value)
 
@@ -629,8 +631,8 @@ class Ontology:
             count = self._count(r, current)
             if r.maximum is not None and count + 1 > r.maximum:
                 raise CardinalityError(
-                    f"a {subject_type} may have {r.describe()}; it already has {count}. "
-                    "Unset one first (or move the object) in the same transaction"
+                    f"{with_article(subject_type)} may have {r.describe()}; it already has "
+                    f"{count}. Unset one first (or move the object) in the same transaction"
                 )
 
     def check_min_cardinality(
@@ -645,7 +647,7 @@ class Ontology:
             if r.minimum:
                 count = self._count(r, current)
                 if count < r.minimum:
-                    message = f"a {cls} should have {r.describe()}; it has {count}"
+                    message = f"{with_article(cls)} should have {r.describe()}; it has {count}"
                     out.append(CardinalityShortfall(restriction=r, actual=count, message=message))
         return tuple(out)
 

@@ -68,6 +68,7 @@ __all__ = [
     "local_name",
     "typed_problem",
     "value_from_literal",
+    "with_article",
 ]
 
 SKM: Final = Namespace("https://skimesh.dev/ontology#")
@@ -98,6 +99,11 @@ FUSABLE_KINDS: Final = frozenset({"float", "int", "Position"})
 NAME_RE: Final = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 CLASS_NAME_RE: Final = re.compile(r"[A-Z][A-Za-z0-9_]*")  # no '-': element ids are <Type>-<n>
 TEMPLATE_NAME_RE: Final = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
+
+
+def with_article(name: str) -> str:
+    """``a Gear``, ``an Arm``: the name with its indefinite article, for messages."""
+    return f"{'an' if name[:1] in 'AEIOU' else 'a'} {name}"
 
 
 def did_you_mean(name: str, candidates: Iterable[str]) -> str:
@@ -173,7 +179,7 @@ class CardinalityRestriction(msgspec.Struct, frozen=True, kw_only=True):
     on_class: str | None = None
 
     def describe(self) -> str:
-        target = f" to a {self.on_class}" if self.on_class else ""
+        target = f" to {with_article(self.on_class)}" if self.on_class else ""
         if self.minimum is not None and self.minimum == self.maximum:
             bound = f"exactly {self.minimum}"
         elif self.maximum is not None and self.minimum:

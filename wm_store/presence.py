@@ -53,6 +53,7 @@ class PresenceMonitor:
         self.store.add_listener(listener)
         try:
             async with (
+                send,
                 anyio.create_task_group() as tg,
                 self.mesh.watch_liveliness(self.mesh.keys.agents()) as events,
             ):
@@ -75,11 +76,12 @@ class PresenceMonitor:
         return self.store.ontology.is_a(element_type, self._agent_class)
 
     async def _reconciler(self, names: anyio.abc.ObjectReceiveStream[str]) -> None:
-        async for name in names:
-            try:
-                await self._reconcile(name)
-            except WmError as exc:
-                _log.warning("could not update presence of agent %s: %s", name, exc)
+        async with names:
+            async for name in names:
+                try:
+                    await self._reconcile(name)
+                except WmError as exc:
+                    _log.warning("could not update presence of agent %s: %s", name, exc)
 
     async def _reconcile(self, name: str) -> None:
         want = name in self.alive

@@ -438,23 +438,35 @@ def _ops(
     relations: list[Relation],
     counters: Mapping[str, int],
 ) -> list[Op]:
-    """AddElement ops in spatial order; each relation in the op of its later end; individuals
-    that poses use as frames get explicit ids (numbered after ``counters``) so the frames can
-    name them."""
+    """AddElement ops; each relation in the op of its later end. Individuals that poses use as
+    frames get explicit ids (numbered after ``counters``) so the frames can name them.
+
+    Order: elements with explicit ids first — per type in increasing number, as the store
+    requires (an explicit id must be above every id of its type used so far) — then the others,
+    whose ids the store assigns after them; both parts parents first where that allows."""
     by_ref = {ind.ref: ind for ind in individuals}
-    order = _spatial_order(ontology, by_ref, relations)
+    spatial = _spatial_order(ontology, by_ref, relations)
     used = dict(counters)
     for ind in individuals:
         parsed = parse_id(ind.id)
         if parsed is not None:
             used[parsed[0]] = max(used.get(parsed[0], 0), parsed[1])
     framed = {f for ind in individuals for v in ind.properties.values() for f in _frames(v)}
-    for ref in order:
+    for ref in spatial:
         ind = by_ref[ref]
         if ref in framed and not ind.id:
             used[ind.type] = used.get(ind.type, 0) + 1
             ind.id = f"{ind.type}-{used[ind.type]}"
     ids = {ref: ind.id for ref, ind in by_ref.items() if ind.id}
+    with_id = [ref for ref in spatial if by_ref[ref].id]
+    slots: dict[str, list[int]] = {}
+    for slot, ref in enumerate(with_id):
+        slots.setdefault(by_ref[ref].type, []).append(slot)
+    for slot_list in slots.values():  # same slots, ids ascending within each type
+        ascending = sorted((with_id[i] for i in slot_list), key=lambda r: id_sort_key(ids[r]))
+        for slot, ref in zip(slot_list, ascending, strict=True):
+            with_id[slot] = ref
+    order = with_id + [ref for ref in spatial if not by_ref[ref].id]
     position = {ref: i for i, ref in enumerate(order)}
     attached: dict[str, list[Relation]] = {ref: [] for ref in order}
     for rel in sorted(set(relations), key=lambda r: (r.subject, r.predicate, r.object)):

@@ -24,11 +24,9 @@ from typing import NamedTuple
 import msgspec
 
 from .errors import (
-    CardinalityError,
     ConflictError,
     DuplicateIdError,
     ElementNotFoundError,
-    PropertyValueError,
     TreeShapeError,
     ValidationError,
 )
@@ -133,13 +131,10 @@ class _Txn:
             )
 
     def _check_property(self, element_type: str, name: str, value: Value) -> None:
-        info = self.ontology.data_property(name)
-        if info.domain and not self.ontology.is_a(element_type, info.domain):
-            raise PropertyValueError(
-                f"property {name!r} applies to {info.domain} elements, not to {element_type}"
-            )
-        if value is not None:
-            self.ontology.check_value(name, value)
+        if value is None:
+            self.ontology.data_property(name)  # deleting: the name must still exist
+        else:
+            self.ontology.check_property(element_type, name, value)
 
     def _stamp(self, element: Element, **changes: object) -> Element:
         return msgspec.structs.replace(element, rev=self.revision, updated_at=self.now, **changes)
@@ -270,15 +265,11 @@ class _Txn:
             return
         if info.spatial:
             self._check_tree(rel)
-        limit = self.ontology.max_cardinality(subject.type, rel.predicate)
-        if limit is not None:
-            preds = self.ontology.subproperties(rel.predicate)
-            count = sum(1 for _ in self.state.match_relations(rel.subject, preds))
-            if count >= limit:
-                raise CardinalityError(
-                    f"{subject.type} {rel.subject} may have at most {limit} "
-                    f"{rel.predicate!r} relation(s); it has {count}"
-                )
+        existing = [
+            (r.predicate, self.state.elements[r.object].type)
+            for r in self.state.match_relations(rel.subject)
+        ]
+        self.ontology.check_max_cardinality(subject.type, rel.predicate, obj.type, existing)
         self._emit(RelationAdded(rel))
 
     def _check_tree(self, rel: Relation) -> None:

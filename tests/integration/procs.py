@@ -40,8 +40,12 @@ class Child:
         self.stdout: queue.Queue[str | None] = queue.Queue()
         self.stderr_lines: list[str] = []
         self._stderr_event = threading.Condition()
-        threading.Thread(target=self._pump_stdout, daemon=True).start()
-        threading.Thread(target=self._pump_stderr, daemon=True).start()
+        self._threads = [
+            threading.Thread(target=self._pump_stdout, daemon=True),
+            threading.Thread(target=self._pump_stderr, daemon=True),
+        ]
+        for thread in self._threads:
+            thread.start()
 
     @property
     def pid(self) -> int:
@@ -116,6 +120,16 @@ class Child:
         if self.proc.poll() is None:
             os.kill(self.proc.pid, signal.SIGKILL)
         self.proc.wait(timeout=10)
+        self._reap()
+
+    def _reap(self) -> None:
+        """After exit: let the readers hit end of file, then close the pipes."""
+        self.close_stdin()
+        for thread in self._threads:
+            thread.join(timeout=10)
+        for stream in (self.proc.stdout, self.proc.stderr):
+            if stream is not None:
+                stream.close()
 
     def stop(self, grace: float = 10.0) -> int:
         """SIGTERM, then SIGKILL after ``grace`` seconds; returns the exit code."""
@@ -126,7 +140,9 @@ class Child:
                 self.proc.wait(timeout=grace)
             except subprocess.TimeoutExpired:
                 self.kill()
-        return self.proc.wait()
+        code = self.proc.wait()
+        self._reap()
+        return code
 
 
 def start_store(endpoint: str, mesh: str, data_dir: Path) -> Child:

@@ -43,6 +43,8 @@ Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
 
 _IDENTITY: Quat = (0.0, 0.0, 0.0, 1.0)
+_EPS = 1e-9
+"""Boundaries count as inside: 1 nm of slack absorbs floating-point noise in frame chains."""
 
 
 def quat_multiply(a: Quat, b: Quat) -> Quat:
@@ -246,6 +248,7 @@ class SpatialReasoner:
         ``tolerance`` metres."""
         box = self._element(container)
         size = box.properties.get(self.size_property)
+        tolerance += _EPS
         for x, y, z in self._points_in(element, box, whole):
             match size:
                 case SizeCylinder(radius=r, height=h):
@@ -272,12 +275,12 @@ class SpatialReasoner:
         top = self._element(surface)
         sx, sy, sz = self.extent(top)
         cx, cy, _ = self._points_in(element, top, whole=False)[0]
-        if abs(cx) > sx / 2 or abs(cy) > sy / 2:
+        if abs(cx) > sx / 2 + _EPS or abs(cy) > sy / 2 + _EPS:
             return False
         e = self._element(element)
         has_size = e.properties.get(self.size_property) is not None
         bottom = min(p[2] for p in self._points_in(e, top, whole=has_size))
-        return abs(bottom - sz / 2) <= tolerance
+        return abs(bottom - sz / 2) <= tolerance + _EPS
 
     # ------------------------------------------------------------------ Reasoner protocol
 

@@ -31,6 +31,7 @@ def test_export_fixes_the_quirks() -> None:
     assert root.find("keyframe") is None
     assert root.find("actuator") is None
     assert not list(root.iter("frame"))
+    assert {b.get("name") for b in root.iter("body")} == {IK_ROOT, "base", "link1", "link2"}
     wrapper = root.find("worldbody/body")
     assert wrapper is not None
     assert wrapper.get("name") == IK_ROOT
@@ -76,10 +77,12 @@ def test_fk_parity_seven_dof_robot() -> None:
     assert max(worst) < 1e-9
 
 
-def test_fk_parity_model_with_frames() -> None:
-    """Nested frames, a posed root body: equal up to the 6 digits ``to_xml`` writes."""
+@pytest.mark.parametrize("site", ["tool", "pinch"])
+def test_fk_parity_model_with_frames(site: str) -> None:
+    """Nested frames, a posed root body, a site two static bodies deep. Element poses are
+    written with 6 digits by ``to_xml``; frames flattened here keep full precision."""
     worst = _placo_vs_mujoco(
-        mujoco.MjSpec.from_file(str(ASSET)), "tool", np.random.default_rng(13), 20
+        mujoco.MjSpec.from_file(str(ASSET)), site, np.random.default_rng(13), 20
     )
     assert max(worst) < 1e-5
 

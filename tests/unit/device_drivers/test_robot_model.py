@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any
 
 import msgspec
@@ -20,6 +21,8 @@ from device_drivers.sim_health import check_state
 from device_drivers.sim_state import hold_servos, joint_positions, set_joint_positions, site_pose
 
 pytestmark = pytest.mark.sim
+
+ASSETS = Path(__file__).parents[2] / "assets"
 
 Pose = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
 
@@ -142,3 +145,16 @@ def test_gripper_opens_to_commanded_width(spec: RobotSpec, layout: RobotLayout) 
     left, right = joint_positions(model, data, layout.finger_joints).values()
     assert left + right == pytest.approx(0.06, abs=1e-3)
     assert left == pytest.approx(right, abs=1e-4)
+
+
+def test_world_with_scene_extras(spec: RobotSpec) -> None:
+    scene = mujoco.MjSpec.from_file(str(ASSETS / "table_with_part.xml"))
+    model = build_world([(spec, Pose2D(0.2, 0.0, 0.0))], extras={"scene": scene}).compile()
+    data = mujoco.MjData(model)
+    hold_servos(model, data)
+    mujoco.mj_step(model, data, nstep=250)  # 0.5 s
+    check_state(model, data)
+    part_z = data.body("scene/part").xpos[2]
+    assert part_z == pytest.approx(0.7 + 0.025, abs=2e-3)  # resting on the table top
+    with pytest.raises(ModelError, match="repeated"):
+        build_world([(spec, Pose2D())], extras={"r1": mujoco.MjSpec()})
