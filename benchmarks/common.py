@@ -12,6 +12,7 @@ Inside a child, :func:`emit` writes a line and :func:`stdin_lines` reads command
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -39,6 +40,8 @@ __all__ = [
     "Row",
     "Stats",
     "emit",
+    "fmt_num",
+    "format_grid",
     "format_table",
     "machine_info",
     "percentile",
@@ -111,7 +114,7 @@ class Row(msgspec.Struct, kw_only=True):
         return self.value / self.baseline_value
 
 
-def _num(value: float) -> str:
+def fmt_num(value: float) -> str:
     if math.isnan(value):
         return "-"
     if abs(value) >= 100:
@@ -121,20 +124,8 @@ def _num(value: float) -> str:
     return f"{value:.2f}"
 
 
-def format_table(rows: Sequence[Row]) -> str:
-    """A plain-text table: figure | value | baseline | ratio | target | met?"""
-    head = ("figure", "value", "baseline", "ratio", "target", "met?")
-    body = [
-        (
-            r.figure,
-            f"{_num(r.value)} {r.unit}",
-            f"{r.baseline} = {_num(r.baseline_value)} {r.unit}" if r.baseline else "-",
-            "-" if math.isnan(r.ratio) else f"{r.ratio:.2f}x",
-            r.target or "-",
-            {None: "-", True: "yes", False: "NO"}[r.met],
-        )
-        for r in rows
-    ]
+def format_grid(head: Sequence[str], body: Sequence[Sequence[str]]) -> str:
+    """A plain-text table with a header rule; columns as wide as their widest cell."""
     widths = [max(len(line[i]) for line in (head, *body)) for i in range(len(head))]
 
     def fmt(cells: Sequence[str]) -> str:
@@ -142,6 +133,23 @@ def format_table(rows: Sequence[Row]) -> str:
 
     rule = "-+-".join("-" * w for w in widths)
     return "\n".join([fmt(head), rule, *(fmt(line) for line in body)])
+
+
+def format_table(rows: Sequence[Row]) -> str:
+    """The results: figure | value | baseline | ratio | target | met?"""
+    head = ("figure", "value", "baseline (same run)", "ratio", "target", "met?")
+    body = [
+        (
+            r.figure,
+            f"{fmt_num(r.value)} {r.unit}",
+            f"{r.baseline} {fmt_num(r.baseline_value)}" if r.baseline else "-",
+            "-" if math.isnan(r.ratio) else f"{r.ratio:.2f}x",
+            r.target or "-",
+            {None: "-", True: "yes", False: "NO"}[r.met],
+        )
+        for r in rows
+    ]
+    return format_grid(head, body)
 
 
 # --------------------------------------------------------------------------- machine
@@ -225,7 +233,9 @@ class Child:
             try:
                 line = self._lines.get(timeout=max(0.0, deadline - time.monotonic()))
             except queue.Empty:
-                raise RuntimeError(f"{self.name}: no {key!r} in {timeout} s\n{self.log()}") from None
+                raise RuntimeError(
+                    f"{self.name}: no {key!r} in {timeout} s\n{self.log()}"
+                ) from None
             if line is None:
                 self.proc.wait(timeout=10)
                 raise RuntimeError(
@@ -247,10 +257,8 @@ class Child:
     def stop(self, grace: float = 10.0) -> int:
         """Close stdin (the child's signal to finish), then SIGTERM, then SIGKILL; by PID."""
         if self.proc.stdin is not None and not self.proc.stdin.closed:
-            try:
+            with contextlib.suppress(BrokenPipeError):
                 self.proc.stdin.close()
-            except BrokenPipeError:
-                pass
         for sig in (None, signal.SIGTERM, signal.SIGKILL):
             if sig is not None and self.proc.poll() is None:
                 os.kill(self.proc.pid, sig)

@@ -10,7 +10,7 @@ pad-to-pad opening (m) carries a position servo of the same name; a joint equali
 
 from __future__ import annotations
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjSpec objects are Any
+import mujoco
 
 from device_drivers.robot_spec import RobotSpec
 
@@ -23,6 +23,7 @@ _PAD = (0.012, 0.004, 0.02)  # finger pad half sizes: along x, thickness (y), al
 _FINGER_T = 0.005  # finger plate half thickness, m
 _PALM_HZ = 0.02  # palm half height along the approach axis, m
 _BOX = mujoco.mjtGeom.mjGEOM_BOX
+_TIMESTEP_FLOOR = 0.002  # solref time constants must stay >= 2 timesteps
 
 
 def add_parallel_gripper(
@@ -80,6 +81,8 @@ def add_parallel_gripper(
             condim=4,
             priority=1,
             friction=[1.5, 0.02, 0.001],
+            solref=[2 * _TIMESTEP_FLOOR, 1.0],  # stiff: ~1 mm squeeze into a part, not 3
+            solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
         )
     mj.add_exclude(bodyname1=f"{p}left_finger", bodyname2=f"{p}right_finger")
 

@@ -12,7 +12,7 @@ owns its model copy and scratch state: use one instance per thread.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Annotated, Protocol, TypeAlias, runtime_checkable
 
 import numpy as np
@@ -62,7 +62,7 @@ class TcpTarget(Struct, frozen=True, forbid_unknown_fields=True):
             raise ValueError(f"approach must be a non-zero direction, got {self.approach}")
 
     @classmethod
-    def pointing_down(cls, position: Sequence[float]) -> TcpTarget:
+    def pointing_down(cls, position: Iterable[float]) -> TcpTarget:
         """The tcp at ``position`` with the gripper pointing down (world -z), yaw free."""
         x, y, z = (float(v) for v in position)
         return cls(position=(x, y, z), approach=(0.0, 0.0, -1.0))

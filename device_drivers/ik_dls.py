@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TypeAlias
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjModel/MjData are Any
+import mujoco
 import numpy as np
 import numpy.typing as npt
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjSpec objects are Any
+import mujoco
 import numpy as np
 
 from device_drivers._placo import placo

@@ -27,7 +27,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any, TypeAlias
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjSpec objects are Any
+import mujoco
 import numpy as np
 import numpy.typing as npt
 

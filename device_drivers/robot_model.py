@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjSpec objects are Any
+import mujoco
 import numpy as np
 
 from device_drivers.errors import ModelError

@@ -91,16 +91,16 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
     """Shoulder-pan joint to the shoulder-lift axis, m."""
     upper_arm_length: Length = 0.38
     """Shoulder-lift axis to elbow axis, m."""
-    forearm_length: Length = 0.32
+    forearm_length: Annotated[float, Meta(ge=0.1, le=10)] = 0.32
     """Elbow axis to wrist centre (where the wrist axes meet), m."""
-    wrist_length: Length = 0.07
+    wrist_length: Annotated[float, Meta(ge=0.04, le=1)] = 0.07
     """Wrist centre to the gripper flange, m."""
-    gripper_length: Length = 0.11
+    gripper_length: Annotated[float, Meta(ge=0.07, le=1)] = 0.11
     """Gripper flange to the tool centre point (middle of the finger pads), m."""
     link_radius: Length = 0.035
     arm_mass: Mass = 3.5
     """Whole arm without gripper, spread over the links by length."""
-    gripper_mass: Mass = 0.6
+    gripper_mass: Annotated[float, Meta(ge=0.15, le=100)] = 0.6
     gripper_max_opening: Length = 0.085
     """Distance between the finger pads when fully open, m."""
     gripper_force: Annotated[float, Meta(gt=0, le=500)] = 40.0

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjModel/MjData are Any
+import mujoco
 import numpy as np
 
 from device_drivers.errors import SimulationDivergedError

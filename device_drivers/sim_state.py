@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed: MjModel/MjData are Any
+import mujoco
 import numpy as np
 import numpy.typing as npt
 

@@ -58,6 +58,8 @@ from .protocol import (
     Value,
 )
 from .query import match_relations, resolve
+from .reasoners.similarity import classify, identify
+from .reasoners.spatial import SpatialReasoner
 from .registration import RobotRegistration, registration_ops, unregistration_ops
 from .replica import Replica
 from .transport import WmTransport, raise_for_error
@@ -175,6 +177,23 @@ class WmClient:
         return Element(
             id="", type=template.type, label=template.label, properties=dict(template.properties)
         )
+
+    def classify(
+        self, element: Element, candidates_type: str, threshold: float = 0.5
+    ) -> list[tuple[str, float]]:
+        """Default individuals (templates) of ``candidates_type`` that ``element`` resembles,
+        with similarity scores >= ``threshold``, best first (SkiROS ``classify``)."""
+        state = self.replica.state
+        return classify(state, self.ontology, element, candidates_type, threshold)
+
+    def identify(self, observed: Element, threshold: float = 0.5) -> list[tuple[str, float]]:
+        """Existing elements that ``observed`` may be, best first (SkiROS ``identify``)."""
+        return identify(self.replica.state, self.ontology, observed, threshold)
+
+    @property
+    def spatial(self) -> SpatialReasoner:
+        """Poses in the world frame, relative poses, inside/on tests over the replica."""
+        return SpatialReasoner(self.replica.state, self.ontology)
 
     # ------------------------------------------------------------------ remote reads
 

@@ -61,6 +61,7 @@ def _free_port() -> int:
 
 def _run(args: argparse.Namespace) -> int:
     scene = config_path("scenes", "sample.ttl")
+    scene_text = scene.read_text()
     port = args.port or _free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
 
@@ -81,7 +82,7 @@ def _run(args: argparse.Namespace) -> int:
                         open_mesh(MeshConfig(connect=(endpoint,))) as mesh,
                         WmClient.connect(ZenohTransport(mesh), author="demo") as wm,
                     ):
-                        ops = import_turtle(scene.read_text(), wm.ontology)
+                        ops = import_turtle(scene_text, wm.ontology, state=wm.replica.state)
                         reply = await wm.transact(ops)
                         print(
                             f"[demo] loaded scene {scene.name}: {len(wm.replica.state.elements)} "

@@ -128,7 +128,7 @@ def _serve(args: argparse.Namespace) -> int:
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             await tg.start(serve_store, mesh, store)
             if scene is not None and not store.state.elements:
-                ops = import_turtle(scene, store.ontology)
+                ops = import_turtle(scene, store.ontology, state=store.state)
                 await store.transact(Transact(ops=ops, author="scene-import"))
             _log.warning(
                 "world model ready: revision %d, %d elements on mesh %r",
@@ -224,7 +224,7 @@ def _import(args: argparse.Namespace) -> int:
     text = Path(args.file).read_text()
 
     async def body(wm: WmClient) -> int:
-        reply = await wm.transact(import_turtle(text, wm.ontology))
+        reply = await wm.transact(import_turtle(text, wm.ontology, state=wm.replica.state))
         added = sum(1 for k in reply.ids if not k.startswith("#"))
         print(f"imported {added} elements at revision {reply.revision}")
         return 0

@@ -18,7 +18,11 @@ SCENE = ROOT / "configs" / "scenes" / "sample.ttl"
 
 def skimesh(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "skimesh", *args], capture_output=True, text=True, timeout=60, cwd=ROOT
+        [sys.executable, "-m", "skimesh", *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=ROOT,
     )
 
 
@@ -57,6 +61,8 @@ def test_wm_client_commands(router_endpoint: str, mesh_name: str, tmp_path: Path
 
 
 def test_no_store_fails_fast_with_advice(router_endpoint: str, mesh_name: str) -> None:
-    result = skimesh("wm", "--connect", router_endpoint, "--mesh", mesh_name, "--timeout", "1", "ls")
+    result = skimesh(
+        "wm", "--connect", router_endpoint, "--mesh", mesh_name, "--timeout", "1", "ls"
+    )
     assert result.returncode != 0
     assert "skimesh wm" in result.stderr

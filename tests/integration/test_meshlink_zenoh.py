@@ -9,7 +9,7 @@ import multiprocessing
 import os
 import signal
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from collections.abc import AsyncIterator, Sequence
 from typing import TYPE_CHECKING
 
 import anyio
@@ -18,10 +18,10 @@ import pytest
 
 from meshlink import (
     Answer,
+    Handler,
     IncomingQuery,
     Liveness,
     Mesh,
-    MeshConfig,
     NoReplyError,
     RemoteError,
     SessionError,
@@ -34,9 +34,8 @@ from meshlink.testing import remote_peer_main, watch_loop
 pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
 
 if TYPE_CHECKING:
+    from tests.conftest import MeshConfigFactory as MakeConfig
     from tests.conftest import SlowSteps
-
-MakeConfig = Callable[..., MeshConfig]
 
 
 @pytest.fixture
@@ -70,7 +69,7 @@ async def test_get_and_serve_in_one_session(client: Mesh) -> None:
         tg.cancel_scope.cancel()
 
 
-def echo_on(key: str) -> Callable[[IncomingQuery], Awaitable[Sequence[Answer]]]:
+def echo_on(key: str) -> Handler:
     """``echo``, answering on the served key (the query's may be a wildcard)."""
 
     async def handler(query: IncomingQuery) -> Sequence[Answer]:

@@ -104,9 +104,9 @@ def test_sigkill_during_burst_loses_no_acknowledged_transaction(
         store.kill()  # SIGKILL in the middle of the burst
         for w in workers:
             w.close_stdin()
-            while (msg := w.next_json(timeout=30)) is not None:
-                if "ack" in msg:
-                    acked.add(msg["ack"])
+            while (tail := w.next_json(timeout=30)) is not None:
+                if "ack" in tail:
+                    acked.add(tail["ack"])
         store = start_store(router_endpoint, mesh_name, data)
 
         async def check(wm: WmClient) -> list[Element]:

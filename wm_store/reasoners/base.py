@@ -46,6 +46,7 @@ __all__ = [
     "ReasonerError",
     "ReasonerFactory",
     "ReasonerSet",
+    "builtin_factories",
 ]
 
 ENTRY_POINT_GROUP = "skimesh.reasoners"

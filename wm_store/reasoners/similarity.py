@@ -171,7 +171,7 @@ def identify(
     _check_threshold(threshold)
     cls = ontology.check_class(observed.type)
     types = set(ontology.subclasses(cls))
-    types.update(c for c in ontology.classes if ontology.is_a(cls, c))
+    types.update(ontology.superclasses(cls))
     spatial = SpatialReasoner(state, ontology)
     here = _world_position(spatial, observed) if position_scale else None
     scores: list[tuple[str, float]] = []

@@ -245,7 +245,7 @@ class SpatialReasoner:
     ) -> bool:
         """Whether ``element``'s centre (``whole``: its whole bounding box) lies within the
         container's volume (cuboid, cylinder or sphere around the container's pose), grown by
-        ``tolerance`` metres."""
+        ``tolerance`` metres. The boundary counts as inside."""
         box = self._element(container)
         size = box.properties.get(self.size_property)
         tolerance += _EPS

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed
+import mujoco
 import numpy as np
 import numpy.typing as npt
 import pytest

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import importlib
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
 MODULES = [
     "device_drivers",
+    "device_drivers._placo",
     "device_drivers.errors",
     "device_drivers.gripper_model",
     "device_drivers.ik",
@@ -30,12 +34,10 @@ def test_all_names_exist(module_name: str) -> None:
 
 
 def test_package_import_is_pure() -> None:
-    """The package root re-exports only the pure core: importing it pulls no placo."""
+    """The package root re-exports only the pure core: importing it pulls in no MuJoCo/placo."""
     code = "import device_drivers, sys; print('placo' in sys.modules, 'mujoco' in sys.modules)"
-    import subprocess
-    import sys
-
+    root = Path(__file__).resolve().parents[3]
     out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd="."
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=root
     )
     assert out.stdout.split() == ["False", "False"]

@@ -8,7 +8,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import msgspec
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed
+import mujoco
 import numpy as np
 import numpy.typing as npt
 import pytest

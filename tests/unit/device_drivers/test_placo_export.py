@@ -8,7 +8,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed
+import mujoco
 import numpy as np
 import numpy.typing as npt
 import pytest

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import msgspec
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed
+import mujoco
 import numpy as np
 import numpy.typing as npt
 import pytest

@@ -19,6 +19,7 @@ def test_defaults_decode_from_empty_table() -> None:
         ({"base_heigth": 0.3}, "unknown field"),
         ({"base_height": -0.3}, "base_height"),
         ({"upper_arm_length": 0.0}, "upper_arm_length"),
+        ({"wrist_length": 0.01}, "wrist_length"),
         ({"arm_dof": 5}, "arm_dof"),
         ({"name": "r 1"}, "name"),
         ({"arm_rgba": [1.0, 0.0, 0.0, 2.0]}, "arm_rgba"),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import mujoco  # type: ignore[import-untyped]  # ships no py.typed
+import mujoco
 import pytest
 
 from device_drivers.errors import SimulationDivergedError

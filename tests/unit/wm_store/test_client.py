@@ -188,3 +188,31 @@ async def test_no_store_gives_transport_error(ontology: Ontology) -> None:
     with pytest.raises(TransportError):
         async with WmClient.connect(Dead(WmService(store)), ontology):
             pass
+
+
+async def test_reasoners_through_the_client(ontology: Ontology) -> None:
+    from wm_store.protocol import Element, Pose, Position, SizeCylinder
+
+    async with (
+        store_service(ontology) as service,
+        WmClient.connect(InMemoryTransport(service), ontology) as wm,
+    ):
+        box = await wm.add_element("Box", properties={"pose": Pose(Position(1.0, 0.0, 0.0))})
+        gear = await wm.add_branch(
+            box,
+            "contain",
+            "Gear",
+            properties={
+                "pose": Pose(Position(0.1, 0.0, 0.0), frame=box),
+                "size": SizeCylinder(0.03, 0.02),
+                "mass": 0.12,
+            },
+        )
+        world = wm.spatial.world_position(gear)
+        assert world.x == pytest.approx(1.1)
+        known = wm.get_element(gear)
+        seen = Element(id="", type="Gear", properties=dict(known.properties))  # as a camera reports
+        assert wm.identify(seen, 0.5)[0][0] == gear
+        ranked = wm.classify(seen, "Part", 0.0)
+        assert ranked, "the default individuals of Part are candidates"
+        assert ranked == sorted(ranked, key=lambda r: -r[1])

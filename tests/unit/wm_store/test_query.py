@@ -6,15 +6,15 @@ import pytest
 
 from wm_store.errors import UnknownClassError
 from wm_store.ontology import Ontology
-from wm_store.protocol import Pose, Position, PropertyFilter, Query, Relation
+from wm_store.protocol import Element, Pose, Position, PropertyFilter, Query, Relation
 from wm_store.query import id_sort_key, match_relations, resolve
 from wm_store.state import SceneState
 
 Kitting = tuple[SceneState, dict[str, str]]
 
 
-def ids(elements: list[object]) -> list[str]:
-    return [e.id for e in elements]  # type: ignore[attr-defined]
+def ids(elements: list[Element]) -> list[str]:
+    return [e.id for e in elements]
 
 
 def test_type_includes_subclasses(kitting: Kitting, ontology: Ontology) -> None:

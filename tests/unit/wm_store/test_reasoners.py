@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from importlib.metadata import EntryPoint
 from pathlib import Path
@@ -47,7 +48,10 @@ ROLL_90 = Orientation(S, 0.0, 0.0, S)
 PITCH_90 = Orientation(0.0, S, 0.0, S)
 
 
-def pose(x: float, y: float, z: float, o: Orientation = Orientation(), frame: str = "") -> Pose:
+IDENTITY = Orientation()
+
+
+def pose(x: float, y: float, z: float, o: Orientation = IDENTITY, frame: str = "") -> Pose:
     return Pose(Position(x, y, z), o, frame)
 
 
@@ -268,7 +272,7 @@ def test_classify_ranks_templates_and_classes(ontology: Ontology) -> None:
     assert math.isclose(ranked[0][1], expected)
     shaft = dict(ranked)["DefaultShaft"]  # extents 0.02 0.02 0.15: far less alike
     assert math.isclose(shaft, ((1 - 0.13 / 0.232) + (1 - 0.082 / 0.2)) / 2)
-    assert all(a[1] >= b[1] for a, b in zip(ranked, ranked[1:], strict=False))
+    assert all(a[1] >= b[1] for a, b in itertools.pairwise(ranked))
     assert classify(state, ontology, observed_gear(), "Part", 0.9) == [
         ("DefaultGear", ranked[0][1])
     ]
@@ -296,7 +300,7 @@ def test_classify_uses_runtime_templates_and_checks_arguments(ontology: Ontology
 
 @pytest.fixture
 def parts() -> SceneState:
-    gear = {"size": SizeCylinder(0.03, 0.02), "mass": 0.12}
+    gear: dict[str, Value] = {"size": SizeCylinder(0.03, 0.02), "mass": 0.12}
     return scene(
         el("Gear-1", "Gear", pose=pose(0, 0, 0), **gear),
         el("Gear-2", "Gear", pose=pose(1, 0, 0), **gear),
@@ -384,13 +388,13 @@ def test_reasoner_set_loads_builtins_entry_points_and_extras(ontology: Ontology)
 def test_reasoner_set_errors(ontology: Ontology) -> None:
     with pytest.raises(ReasonerError, match="failed to load"):
         ReasonerSet.load(discover=lambda group: points(("broken", "no_such_module_xyz:Thing")))
-    with pytest.raises(ReasonerError, match="two 'skimesh.reasoners' entry points"):
+    with pytest.raises(ReasonerError, match=r"two 'skimesh\.reasoners' entry points"):
         ReasonerSet.load(discover=lambda group: points(("a", f"{__name__}:Named"), ("a", "x:Y")))
     with pytest.raises(ReasonerError, match="not callable"):
         ReasonerSet.load(discover=lambda group: points(("a", f"{__name__}:ROOT.name")))
     misnamed = ReasonerSet({"heat": Named})
     with pytest.raises(ReasonerError, match="calls itself 'thermal'"):
         misnamed.bind(SceneState(), ontology)
-    not_a_reasoner = ReasonerSet({"x": lambda view, onto: object()})  # type: ignore[dict-item]
+    not_a_reasoner = ReasonerSet({"x": lambda view, onto: object()})  # type: ignore[dict-item,return-value]
     with pytest.raises(ReasonerError, match="lacks part of the Reasoner protocol"):
         not_a_reasoner.bind(SceneState(), ontology)

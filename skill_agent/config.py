@@ -1,0 +1,226 @@
+"""The configuration of one skill agent (``skimesh agent --config FILE``), read from TOML.
+
+Example (``configs/agents/pick.toml``)::
+
+    name = "r1"                      # liveliness token agents/r1, Agent element "r1"
+    conditions = ["my_pkg.conds"]    # modules whose custom condition classes are registered
+
+    [robot]
+    type = "MobileManipulator"
+    label = "r1"
+
+    [[devices]]
+    type = "Gripper"
+    label = "r1-gripper"
+
+    [skills]
+    paths = ["my_pkg.skills:Pick", "my_pkg.more_skills", "../skills/place.py"]
+    entry_points = ["noop"]          # names in the entry-point group skimesh.skills; "*" = all
+
+    [simulation]                     # simulated-outcome mode (FRIEND II)
+    enabled = false
+    probabilities = { pick = 0.8 }
+    seed = 7
+
+    [sensing]
+    max_age = 2.0                    # default sensing_max_age for skills that set none
+
+    [[services]]                     # an external service driven as a skill (skill_agent.adapter)
+    service = "partner/door"
+    description = { name = "open_door", doc = "open the microwave door" }
+
+Strict: an unknown key is an error that names the file and the field (``$.robot.lable``).
+Relative paths (skill files, ``event_log``, ``ontology``) are relative to the config file.
+Pure: no network, nothing blocks except reading the file.
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Annotated
+
+import msgspec
+from msgspec import Meta
+
+from meshlink.keys import check_name
+from wm_store.protocol import Value
+
+from .errors import SkillLoadError
+from .protocol import SkillDescription
+
+__all__ = [
+    "AgentConfig",
+    "DeviceConfig",
+    "RobotConfig",
+    "SensingConfig",
+    "ServiceSkillConfig",
+    "SimulationConfig",
+    "SkillsConfig",
+    "is_file_reference",
+    "load_config",
+    "parse_config",
+]
+
+Probability = Annotated[float, Meta(ge=0.0, le=1.0)]
+
+
+class RobotConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """The robot (or appliance) the agent controls; reused in the world model by label."""
+
+    type: str = "Robot"
+    label: str = ""
+    """Defaults to the agent's name."""
+    properties: dict[str, Value] = {}
+
+
+class DeviceConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """One device of the robot (``hasA``): the hardware skills lock while they run."""
+
+    type: str
+    label: str
+    properties: dict[str, Value] = {}
+
+
+class SkillsConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    paths: list[str] = []
+    """``pkg.mod:Class``, ``pkg.mod`` (every Skill subclass defined in it), or a file
+    ``dir/skills.py`` / ``dir/skills.py:Class`` (relative to the config file)."""
+    entry_points: list[str] = []
+    """Names in the entry-point group ``skimesh.skills``; ``"*"`` loads all of them."""
+
+
+class SimulationConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Simulated-outcome mode: no hardware, outcomes drawn, effects applied to the WM."""
+
+    enabled: bool = False
+    default: Probability | None = None
+    """Probability for skills not listed in ``probabilities`` (else the skill's own
+    ``success_probability``)."""
+    probabilities: dict[str, Probability] = {}
+    seed: int | None = None
+
+
+class SensingConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    max_age: Annotated[float, Meta(ge=0)] | None = None
+    """Default ``sensing_max_age`` (seconds) for skills whose description sets none."""
+
+
+class ServiceSkillConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """A skill whose work is done by an external service (see :mod:`skill_agent.adapter`)."""
+
+    service: str
+    """The service's name under ``skimesh/<mesh>/services/`` (segments separated by ``/``)."""
+    description: SkillDescription
+    goal_timeout: Annotated[float, Meta(gt=0)] = 5.0
+
+
+class AgentConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Everything ``skimesh agent`` needs besides the mesh flags."""
+
+    name: str
+    agent_type: str = "RobotAgent"
+    robot: RobotConfig = RobotConfig()
+    devices: list[DeviceConfig] = []
+    skills: SkillsConfig = SkillsConfig()
+    services: list[ServiceSkillConfig] = []
+    conditions: list[str] = []
+    """Modules whose custom condition classes (``name`` + ``evaluate`` + ``symbolic``) are
+    registered for this agent's skills."""
+    simulation: SimulationConfig = SimulationConfig()
+    sensing: SensingConfig = SensingConfig()
+    ontology: list[str] = []
+    """Extra Turtle files the skills' classes come from (as given to ``skimesh wm``)."""
+    preempt_timeout: Annotated[float, Meta(gt=0)] = 5.0
+    event_log: str | None = None
+    """Append the agent's structured event log (JSON lines) to this file."""
+
+    def __post_init__(self) -> None:
+        check_name(
+            self.name, "agent name"
+        )  # InvalidKeyError is a ValueError: msgspec adds the path
+        labels = [d.label for d in self.devices]
+        dup = sorted({label for label in labels if labels.count(label) > 1})
+        if dup:
+            raise ValueError(f"device labels must be unique; repeated: {', '.join(dup)}")
+
+    @property
+    def robot_label(self) -> str:
+        return self.robot.label or self.name
+
+    def check_skill_names(self, names: Iterable[str]) -> None:
+        """Every skill named in ``simulation.probabilities`` must be loaded.
+
+        Raises:
+            SkillLoadError: naming the unknown skill and the closest loaded one.
+        """
+        known = sorted(names)
+        for name in self.simulation.probabilities:
+            if name not in known:
+                close = difflib.get_close_matches(name, known, n=1)
+                hint = f"; did you mean {close[0]!r}?" if close else f" (loaded: {known})"
+                raise SkillLoadError(
+                    f"simulation.probabilities names skill {name!r}, which is not loaded{hint}"
+                )
+
+
+def is_file_reference(ref: str) -> bool:
+    """True if a skill reference names a Python file (``x.py`` or ``x.py:Class``)."""
+    return ref.partition(":")[0].endswith(".py")
+
+
+def _resolve(base: Path, path: str) -> str:
+    p = Path(path).expanduser()
+    return str(p if p.is_absolute() else (base / p).resolve())
+
+
+def _resolve_ref(base: Path, ref: str) -> str:
+    if not is_file_reference(ref):
+        return ref
+    file, sep, cls = ref.partition(":")
+    return _resolve(base, file) + sep + cls
+
+
+def parse_config(
+    text: str, *, source: str = "<config>", base_dir: Path | None = None
+) -> AgentConfig:
+    """Parse TOML ``text``; relative paths are made absolute against ``base_dir``.
+
+    Raises:
+        SkillLoadError: bad TOML (line and column) or a bad field (its path, e.g.
+            ``$.devices[0].type``); the message starts with ``source``.
+    """
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SkillLoadError(f"{source}: not valid TOML: {e}") from None
+    try:
+        config = msgspec.convert(raw, AgentConfig)
+    except msgspec.ValidationError as e:
+        raise SkillLoadError(f"{source}: {e}") from None
+    if base_dir is None:
+        return config
+    return msgspec.structs.replace(
+        config,
+        skills=msgspec.structs.replace(
+            config.skills, paths=[_resolve_ref(base_dir, r) for r in config.skills.paths]
+        ),
+        ontology=[_resolve(base_dir, p) for p in config.ontology],
+        event_log=None if config.event_log is None else _resolve(base_dir, config.event_log),
+    )
+
+
+def load_config(path: str | Path) -> AgentConfig:
+    """Read an agent config file.
+
+    Raises:
+        SkillLoadError: the file is missing, or its content is invalid (see :func:`parse_config`).
+    """
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as e:
+        raise SkillLoadError(f"cannot read agent config {str(file)!r}: {e.strerror}") from None
+    return parse_config(text, source=str(file), base_dir=file.resolve().parent)
