@@ -39,10 +39,13 @@ __all__ = [
     "Child",
     "Row",
     "Stats",
+    "calibrate",
+    "cpu_seconds",
     "emit",
     "fmt_num",
     "format_grid",
     "format_table",
+    "load_average",
     "machine_info",
     "percentile",
     "stdin_lines",
@@ -140,7 +143,7 @@ def format_table(rows: Sequence[Row]) -> str:
     head = ("figure", "value", "baseline (same run)", "ratio", "target", "met?")
     body = [
         (
-            r.figure,
+            f"{r.figure} ({r.note})" if r.note else r.figure,
             f"{fmt_num(r.value)} {r.unit}",
             f"{r.baseline} {fmt_num(r.baseline_value)}" if r.baseline else "-",
             "-" if math.isnan(r.ratio) else f"{r.ratio:.2f}x",
@@ -178,6 +181,34 @@ def machine_info(packages: Sequence[str] = ()) -> dict[str, str]:
         except metadata.PackageNotFoundError:
             info[name] = "not installed"
     return info
+
+
+def calibrate(repeat: int = 5) -> float:
+    """ms for a fixed pure-Python workload, best of ``repeat``: how fast this machine runs
+    Python right now (other load on a shared machine makes it slower). Print it with results."""
+    best = math.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        total = 0
+        for i in range(300_000):
+            total += i % 7
+        best = min(best, time.perf_counter() - start)
+    return best * 1e3
+
+
+def load_average() -> str:
+    """The 1-minute load average and the number of usable CPUs, e.g. ``"2.5 on 2 CPUs"``."""
+    return f"{os.getloadavg()[0]:.1f} on {len(os.sched_getaffinity(0))} CPUs"
+
+
+def cpu_seconds(pid: int | None = None) -> float:
+    """CPU time (user + system, every thread) used so far by process ``pid`` (Linux
+    ``/proc/<pid>/stat``), or by this process when ``pid`` is None."""
+    if pid is None:
+        return time.process_time()
+    stat = Path(f"/proc/{pid}/stat").read_text()
+    fields = stat[stat.rindex(")") + 2 :].split()  # after "pid (comm) "
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 # --------------------------------------------------------------------------- child processes

@@ -5,11 +5,20 @@ Hierarchy::
 
     DeviceError
     ├── ModelError                  a robot or scene model cannot be built, exported or loaded
-    │   └── UnknownElementError     no joint/site/actuator of that name (suggests close names)
+    │   ├── UnknownElementError     no joint/site/actuator of that name (suggests close names)
+    │   └── ScenarioError           a scenario file is invalid (names the file and the field path)
     ├── IKError                     IK cannot be set up or run (unknown frame or joint, bad q0)
     │   └── UnreachableError        the solver did not converge: target out of reach or blocked by
     │                               joint limits; carries the residual errors
-    └── SimulationDivergedError     NaN/Inf or runaway accelerations in the simulation state
+    ├── SimulationDivergedError     NaN/Inf or runaway accelerations in the simulation state
+    ├── MotionError                 a commanded motion did not complete
+    │   ├── CollisionError          the motion would hit, or hit, something
+    │   ├── MotionTimeoutError      the motion did not reach its target in time
+    │   ├── MotionStoppedError      stop() (or a door opening, a newer halt) ended the motion
+    │   └── GraspLostError          the gripper lost (or never got) the object
+    ├── CommandError                the command is malformed or not allowed now (nothing moved)
+    ├── DeviceBusyError             the device is executing another command
+    └── DeviceUnavailableError      the device cannot be reached (remote transport) or is stopped
 
 Messages name the file, body, joint or site concerned and, where known, what to do.
 """
@@ -20,9 +29,18 @@ import difflib
 from collections.abc import Iterable, Mapping
 
 __all__ = [
+    "CollisionError",
+    "CommandError",
+    "DeviceBusyError",
     "DeviceError",
+    "DeviceUnavailableError",
+    "GraspLostError",
     "IKError",
     "ModelError",
+    "MotionError",
+    "MotionStoppedError",
+    "MotionTimeoutError",
+    "ScenarioError",
     "SimulationDivergedError",
     "UnknownElementError",
     "UnreachableError",
@@ -53,6 +71,12 @@ class UnknownElementError(ModelError):
         super().__init__(f"no {kind} named {name!r}{hint}")
         self.kind = kind
         self.name = name
+
+
+class ScenarioError(ModelError):
+    """A scenario file cannot be read or is invalid. The message starts with the file and
+    names the field by its path (``$.parts[3].parent``) and, for a bad reference, the labels
+    that do exist."""
 
 
 class IKError(DeviceError):
@@ -113,3 +137,37 @@ class SimulationDivergedError(DeviceError):
         self.time = time
         self.culprit = culprit
         self.field = field
+
+
+class MotionError(DeviceError):
+    """A commanded motion did not complete; the device has stopped safely."""
+
+
+class CollisionError(MotionError):
+    """The motion would hit (or hit) something; names what."""
+
+
+class MotionTimeoutError(MotionError):
+    """The motion did not reach its target within its time limit."""
+
+
+class MotionStoppedError(MotionError):
+    """The motion was ended before its target by :meth:`stop`, a halt after a cancellation,
+    or the device's own safety logic (a microwave door opened while heating)."""
+
+
+class GraspLostError(MotionError):
+    """The gripper does not hold the object it should (never grasped, or dropped it)."""
+
+
+class CommandError(DeviceError):
+    """The command is malformed or not allowed in the device's present state (an unknown joint,
+    a target outside the joint limits, heating with the door open). Nothing moved."""
+
+
+class DeviceBusyError(DeviceError):
+    """The device is executing another command; stop it first."""
+
+
+class DeviceUnavailableError(DeviceError):
+    """The device cannot be reached (remote transport) or its simulation stopped."""

@@ -108,17 +108,22 @@ class RunFeed:
     async def open(cls, mesh: Mesh, agent: str, key: str) -> AsyncIterator[RunFeed]:
         """Subscribe to ``key`` (one run's or every run's progress) and watch ``agent``."""
         feed = cls()
-        async with (
-            mesh.subscribe(key) as samples,
-            mesh.watch_liveliness(mesh.keys.agent(agent)) as presence,
-            anyio.create_task_group() as tg,
-        ):
-            tg.start_soon(feed._pump_events, samples)
-            tg.start_soon(feed._pump_presence, presence)
-            try:
-                yield feed
-            finally:
-                tg.cancel_scope.cancel()
+        try:
+            async with (
+                mesh.subscribe(key) as samples,
+                mesh.watch_liveliness(mesh.keys.agent(agent)) as presence,
+                anyio.create_task_group() as tg,
+            ):
+                tg.start_soon(feed._pump_events, samples)
+                tg.start_soon(feed._pump_presence, presence)
+                try:
+                    yield feed
+                finally:
+                    tg.cancel_scope.cancel()
+        except BaseExceptionGroup as group:  # the caller's error, not a group of ours
+            if len(group.exceptions) == 1 and isinstance(group.exceptions[0], Exception):
+                raise group.exceptions[0] from None
+            raise
 
     @contextmanager
     def register(self, run_id: str) -> Iterator[MemoryObjectReceiveStream[RunEvent | Liveness]]:
@@ -296,8 +301,10 @@ class AgentClient:
         return await self._expect(request, RunStarted, request_timeout)
 
     async def stop(self, run_id: str, *, timeout: float | None = None) -> RunResult:
-        """Stop a run; returns its result once it is preempted (safe state reached)."""
-        reply = await self._expect(StopRun(run_id=run_id), RunsReply, timeout)
+        """Stop a run; returns its result once it is preempted (safe state reached). The
+        default wait is ``timeout + 10`` s: the skill's ``on_preempt`` may take a while."""
+        request = StopRun(run_id=run_id)
+        reply = await self._expect(request, RunsReply, timeout or self.timeout + 10.0)
         info = reply.runs[0] if reply.runs else None
         if info is None or info.result is None:
             raise AgentTransportError(f"agent {self.agent!r} stopped {run_id} without a result")
@@ -348,8 +355,11 @@ class AgentClient:
         while True:
             wait = self.status_every if lost_since is None else self.lost_grace
             item: RunEvent | Liveness | None = None
-            with anyio.move_on_after(wait):
-                item = await inbox.receive()
+            try:
+                item = inbox.receive_nowait()  # a burst of events needs no timer each
+            except anyio.WouldBlock:
+                with anyio.move_on_after(wait):
+                    item = await inbox.receive()
             if item is None:  # quiet for `wait` seconds
                 if lost_since is not None:
                     raise AgentTransportError(

@@ -96,11 +96,15 @@ class SimulationConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown
     """Simulated-outcome mode: no hardware, outcomes drawn, effects applied to the WM."""
 
     enabled: bool = False
-    default: Probability | None = None
-    """Probability for skills not listed in ``probabilities`` (else the skill's own
-    ``success_probability``)."""
     probabilities: dict[str, Probability] = {}
+    """By skill name or skill type; first match wins: name, type, the skill class's own
+    ``success_probability``, then ``default``."""
+    default: Probability | None = None
+    """Probability of skills matched by nothing else (1.0 if unset)."""
     seed: int | None = None
+    """Makes the sequence of drawn outcomes reproducible."""
+    time_scale: Annotated[float, Meta(ge=0)] = 0.0
+    """A simulated run takes ``duration * time_scale`` seconds (0: at once)."""
 
 
 class SensingConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):

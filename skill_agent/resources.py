@@ -27,7 +27,7 @@ import msgspec
 
 from .errors import ResourceBusyError
 
-__all__ = ["LockStats", "ResourceLocks"]
+__all__ = ["LockRequest", "LockStats", "ResourceLocks"]
 
 
 class LockStats(msgspec.Struct, frozen=True):
@@ -44,6 +44,27 @@ class _Waiter:
         self.run_id = run_id
         self.ids = ids
         self.granted = anyio.Event()
+
+
+class LockRequest:
+    """A place in the queue of :class:`ResourceLocks` (from :meth:`ResourceLocks.enqueue`)."""
+
+    def __init__(self, locks: ResourceLocks, waiter: _Waiter) -> None:
+        self._locks = locks
+        self._waiter = waiter
+
+    @property
+    def granted(self) -> bool:
+        return self._waiter.granted.is_set()
+
+    async def wait(self) -> None:
+        """Block until the devices are locked for the run; cancellation withdraws the
+        request (and releases the devices if they were just granted)."""
+        try:
+            await self._waiter.granted.wait()
+        except BaseException:
+            self._locks._withdraw(self._waiter)
+            raise
 
 
 class ResourceLocks:
@@ -83,23 +104,26 @@ class ResourceLocks:
         """Lock every device in ``ids``, waiting in FIFO order while any is busy.
 
         Blocks until granted; cancellation withdraws the request (nothing stays locked)."""
+        await self.enqueue(run_id, ids).wait()
+
+    def enqueue(self, run_id: str, ids: Iterable[str]) -> LockRequest:
+        """Take a place in the queue now (or the devices, if free); ``await request.wait()``
+        for them. Lets a caller fix its place in line before it starts waiting."""
         wanted = frozenset(ids)
+        waiter = _Waiter(run_id, wanted)
         try:
             self.try_acquire(run_id, wanted)
-            return
+            waiter.granted.set()
         except ResourceBusyError:
-            pass
-        waiter = _Waiter(run_id, wanted)
-        self._waiters.append(waiter)
-        try:
-            await waiter.granted.wait()
-        except BaseException:
-            if waiter.granted.is_set():
-                self.release(run_id)
-            else:
-                self._waiters.remove(waiter)
-                self._serve()
-            raise
+            self._waiters.append(waiter)
+        return LockRequest(self, waiter)
+
+    def _withdraw(self, waiter: _Waiter) -> None:
+        if waiter.granted.is_set():
+            self.release(waiter.run_id)
+        elif waiter in self._waiters:
+            self._waiters.remove(waiter)
+            self._serve()
 
     def release(self, run_id: str) -> None:
         """Unlock everything ``run_id`` holds (borrowed devices go back to their lender), then

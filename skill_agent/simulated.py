@@ -18,7 +18,10 @@ from __future__ import annotations
 import random
 from collections.abc import Mapping
 
+import anyio
+
 from .errors import SkillLoadError
+from .protocol import SkillDescription
 from .skill import Skill
 
 __all__ = ["SimulatedOutcomes", "skill_probability"]
@@ -31,7 +34,7 @@ def skill_probability(skill: type[Skill]) -> float | None:
         if cls is Skill:
             return None
         if "success_probability" in vars(cls):
-            return float(cls.success_probability)
+            return float(vars(cls)["success_probability"])
     return None
 
 
@@ -67,6 +70,17 @@ class SimulatedOutcomes:
             return self.probabilities[family]
         own = None if implementation is None else skill_probability(implementation)
         return self.default if own is None else own
+
+    async def play(self, description: SkillDescription, implementation: type[Skill]) -> str | None:
+        """One simulated execution: wait ``duration * time_scale`` seconds (a cancellation
+        point), then draw; returns None on success, else the failure message."""
+        if self.time_scale and description.duration:
+            await anyio.sleep(description.duration * self.time_scale)
+        name, family = description.name, description.family
+        if self.draw(name, family=family, implementation=implementation):
+            return None
+        p = self.probability(name, family=family, implementation=implementation)
+        return f"simulated failure (p(success) = {p:g})"
 
     def draw(
         self, name: str, *, family: str = "", implementation: type[Skill] | None = None

@@ -9,7 +9,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .commands import demo, router, wm
+from .commands import agent, demo, router, sim, wm
 from .runtime import configure_logging
 
 __all__ = ["build_parser", "main"]
@@ -28,7 +28,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     router.add_parser(sub)
     wm.add_parser(sub)
+    agent.add_parser(sub)
     demo.add_parser(sub)
+    sim.add_parser(sub)
     return parser
 
 

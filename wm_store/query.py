@@ -56,7 +56,20 @@ def resolve(state: SceneState, ontology: Ontology, query: Query, limit: int = 0)
     for f in query.filters:
         ontology.data_property(f.property)
     elements = state.elements
-    matches = [elements[i] for i in candidates if all(check(elements[i]) for check in checks)]
+    if not checks:
+        matches = [elements[i] for i in candidates]
+    elif len(checks) == 1:
+        check = checks[0]
+        matches = [e for e in map(elements.__getitem__, candidates) if check(e)]
+    else:
+        matches = []
+        for element_id in candidates:
+            element = elements[element_id]
+            for check in checks:
+                if not check(element):
+                    break
+            else:
+                matches.append(element)
     matches.sort(key=lambda e: id_sort_key(e.id))
     return matches[:limit] if limit else matches
 
@@ -115,6 +128,14 @@ def _compile_filter(f: PropertyFilter) -> Callable[[Element], bool]:
         tol = f.tolerance
         return lambda e: _distance(e.properties.get(name), want) <= tol
     compare = _ORDER[op]
+    if isinstance(want, int | float) and not isinstance(want, bool):
+        number = float(want)
+
+        def numeric(e: Element) -> bool:
+            have = e.properties.get(name)
+            return type(have) in (int, float) and compare(have, number)
+
+        return numeric
 
     def ordered(e: Element) -> bool:
         have = e.properties.get(name)

@@ -69,7 +69,9 @@ class Replica:
         self._spatial = frozenset(n for n, r in base_ontology.relations.items() if r.spatial)
         self.state.set_spatial_predicates(self._spatial)
         self._lock = anyio.Lock()
-        self._changed = anyio.Event()
+        self._waiters: dict[int, anyio.Event] = {}
+        """One event per awaited revision, set once the replica reaches it: a writer waiting
+        for its revision wakes once, not on every change."""
         self._callbacks: list[Callable[[Change], None]] = []
         self._streams: list[MemoryObjectSendStream[Change]] = []
         self._applied = 0
@@ -150,8 +152,11 @@ class Replica:
         self._notify()
 
     def _notify(self) -> None:
-        self._changed.set()
-        self._changed = anyio.Event()
+        if not self._waiters:
+            return
+        reached = [r for r in self._waiters if r <= self.state.revision]
+        for revision in reached:
+            self._waiters.pop(revision).set()
 
     # ------------------------------------------------------------------ waiting and watching
 
@@ -162,8 +167,11 @@ class Replica:
         """
         with anyio.fail_after(self.timeout if timeout is None else timeout):
             while self.state.revision < revision:
+                event = self._waiters.get(revision)
+                if event is None:
+                    event = self._waiters[revision] = anyio.Event()
                 with anyio.move_on_after(self.catch_up_after):
-                    await self._changed.wait()
+                    await event.wait()
                     continue
                 async with self._lock:
                     if self.state.revision < revision:

@@ -1,0 +1,251 @@
+"""The arm controller (simulation thread): joint moves, tool moves, grasp watching.
+
+- ``MoveJoints``: a minimum-jerk trajectory from the present set-points to the target, over
+  ``duration`` (default: 1 rad/s peak on the joint that moves most, at least 0.4 s).
+- ``MoveTcp`` with ``straight``: the tool follows the line (and the slerp of orientations)
+  from the set-point pose to the target with a minimum-jerk time law; each control tick
+  :class:`~device_drivers.tcp_tracker.TcpTracker` solves IK for the next point (base joints
+  too with ``whole_body``, the base then belongs to the arm until the motion ends). If the
+  tracker loses the path, a full DLS solve takes over for that tick; if that fails too, the arm
+  halts and the motion fails with :class:`UnreachableError`. Without ``straight``: a joint move
+  to the IK solution the driver computed (``MoveTcp.final``).
+- Completion: set-points at the target, then the joints within 0.01 rad and slow; otherwise
+  :class:`MotionTimeoutError` 2 s (simulated) after the trajectory's end.
+- A motion started while the gripper holds something fails with :class:`GraspLostError` as
+  soon as the gripper no longer holds it (the arm halts).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+import numpy as np
+
+from device_drivers.control import Controller, DeviceKey, Job
+from device_drivers.errors import (
+    CommandError,
+    DeviceBusyError,
+    GraspLostError,
+    MotionTimeoutError,
+    UnreachableError,
+)
+from device_drivers.ik import IKOptions, TcpTarget
+from device_drivers.ik_dls import DlsIK
+from device_drivers.interfaces import ArmState
+from device_drivers.motion_math import PEAK_SPEED, minjerk, pose_of, quat_angle, quat_wxyz, slerp
+from device_drivers.protocol import MoveJoints, MoveTcp
+from device_drivers.robot_spec import RobotSpec, robot_layout
+from device_drivers.tcp_tracker import TcpTracker
+
+if TYPE_CHECKING:
+    from device_drivers.base_control import BaseController
+    from device_drivers.gripper_control import GripperController
+
+__all__ = ["ArmController"]
+
+_JOINT_SPEED = 1.0  # peak joint speed of a default-duration move, rad/s
+_ANGULAR_SPEED = 1.0  # peak tool rotation speed of a straight move, rad/s
+_SETTLE = 2.0  # s after the trajectory's end before MotionTimeoutError
+_TRACK_POS, _TRACK_ROT = 2e-3, 0.02  # tracker residual that hands a tick to the full solver
+_JUMP = 0.15  # largest set-point change per tick, rad: more means a branch flip
+
+
+class ArmController(Controller):
+    def __init__(
+        self,
+        key: DeviceKey,
+        label: str,
+        model: Any,
+        data: Any,
+        spec: RobotSpec,
+        gripper: GripperController,
+        base: BaseController,
+    ) -> None:
+        super().__init__(key, label)
+        self.m, self.d = model, data
+        layout = robot_layout(spec)
+        self.prefix = layout.prefix
+        self.joints = layout.arm_joints
+        self.short = tuple(j.removeprefix(self.prefix) for j in self.joints)
+        self.acts = np.array([model.actuator(j).id for j in self.joints])
+        self.qadr = np.array([model.jnt_qposadr[model.joint(j).id] for j in self.joints])
+        self.dadr = np.array([model.jnt_dofadr[model.joint(j).id] for j in self.joints])
+        self.range = np.array([model.jnt_range[model.joint(j).id] for j in self.joints])
+        self.site = model.site(layout.tcp_site).id
+        self.gripper, self.base = gripper, base
+        self.tracker = TcpTracker(spec)
+        self.fallback = DlsIK.for_robot(spec, IKOptions(restarts=0, max_iterations=30))
+        self.plan: dict[str, Any] = {}
+
+    # ------------------------------------------------------------------ start
+    def begin(self, job: Job, t: float) -> None:
+        cmd = job.command
+        q0 = self.d.ctrl[self.acts].copy()
+        if isinstance(cmd, MoveJoints):
+            q1 = q0.copy()
+            for name, value in cmd.target.items():
+                q1[self._index(name)] = value
+            self._check_limits(q1)
+            self._joint_plan(q0, q1, cmd.duration, base=None)
+        elif isinstance(cmd, MoveTcp):
+            if cmd.whole_body and (self.base.job is not None or self.base.owner):
+                raise DeviceBusyError(f"{self.base.label} is busy; whole-body motion needs it")
+            if cmd.straight:
+                self._line_plan(cmd)
+            else:
+                final = [cmd.final.get(j, q) for j, q in zip(self.joints, q0, strict=True)]
+                base = None
+                if cmd.whole_body:
+                    base = np.array([cmd.final.get(j, 0.0) for j in self.base.joints])
+                self._joint_plan(q0, np.array(final), None, base=base)
+            if cmd.whole_body:
+                self.base.owner = self.label
+        else:
+            raise CommandError(f"{self.label} (an arm) cannot {type(cmd).__name__}")
+        self.plan["holding"] = self.gripper.holding
+
+    def _index(self, name: str) -> int:
+        short = name.removeprefix(self.prefix)
+        if short in self.short:
+            return self.short.index(short)
+        close = difflib.get_close_matches(short, self.short, n=1)
+        hint = f"did you mean {close[0]!r}?" if close else f"joints: {list(self.short)}"
+        raise CommandError(f"{self.label} has no joint {name!r}; {hint}")
+
+    def _check_limits(self, q: np.ndarray[Any, Any]) -> None:
+        for name, value, (lo, hi) in zip(self.short, q, self.range, strict=True):
+            if not lo - 1e-9 <= value <= hi + 1e-9:
+                raise CommandError(
+                    f"{self.label}: {name} = {value:.3f} rad is outside its limits "
+                    f"[{lo:.2f}, {hi:.2f}]"
+                )
+
+    def _joint_plan(
+        self, q0: Any, q1: Any, duration: float | None, base: np.ndarray[Any, Any] | None
+    ) -> None:
+        spans = [float(np.max(np.abs(q1 - q0)))]
+        b0 = self.d.ctrl[self.base.acts].copy()
+        if base is not None:
+            spans.append(float(np.max(np.abs(base - b0))))
+        period = duration or max(0.4, PEAK_SPEED * max(spans) / _JOINT_SPEED)
+        self.plan = {"kind": "joints", "q0": q0, "q1": q1, "T": period, "b0": b0, "b1": base}
+
+    def _line_plan(self, cmd: MoveTcp) -> None:
+        q = np.concatenate([self.d.ctrl[self.base.acts], self.d.ctrl[self.acts]])
+        p0, r0 = self.tracker.fk(q)
+        quat0 = np.zeros(4)
+        mujoco.mju_mat2Quat(quat0, r0.ravel())
+        target = cmd.target
+        p1, quat1 = np.array([target.x, target.y, target.z]), quat_wxyz(target)
+        length, angle = float(np.linalg.norm(p1 - p0)), quat_angle(quat0, quat1)
+        period = max(0.3, PEAK_SPEED * length / cmd.speed, PEAK_SPEED * angle / _ANGULAR_SPEED)
+        self.plan = {"kind": "line", "q": q, "p0": p0, "p1": p1, "quat0": quat0, "quat1": quat1}
+        self.plan.update(T=period, whole_body=cmd.whole_body, q1=None)
+
+    # ------------------------------------------------------------------ ticks
+    def update(self, job: Job, t: float) -> None:
+        plan = self.plan
+        held = plan["holding"]
+        if held and self.gripper.holding != held:
+            raise GraspLostError(f"{self.gripper.label} lost {held} while {self.label} moved")
+        s = (t - self.started_at) / plan["T"]
+        job.progress = 0.95 * min(s, 1.0)
+        if plan["kind"] == "joints":
+            f = minjerk(s)
+            self.d.ctrl[self.acts] = plan["q0"] + f * (plan["q1"] - plan["q0"])
+            if plan["b1"] is not None:
+                self.d.ctrl[self.base.acts] = plan["b0"] + f * (plan["b1"] - plan["b0"])
+        elif plan["q1"] is None:
+            self._track(plan, minjerk(s), done=s >= 1.0)
+        if s < 1.0:
+            return
+        error = np.abs(self.d.qpos[self.qadr] - self.d.ctrl[self.acts])
+        still = float(np.abs(self.d.qvel[self.dadr]).max()) < 0.05
+        if self.base.owner == self.label:  # whole body: the base must be there too
+            base_error = np.abs(self.d.qpos[self.base.qadr] - self.d.ctrl[self.base.acts])
+            still = still and float(base_error.max()) < 0.003
+        if float(error.max()) < 0.01 and still:
+            self.done(job)
+        elif t - self.started_at > plan["T"] + _SETTLE:
+            worst = int(np.argmax(error))
+            raise MotionTimeoutError(
+                f"{self.label}: {self.short[worst]} is {error[worst]:.3f} rad from its target "
+                f"{_SETTLE:g} s after the trajectory ended (blocked, or overloaded?)"
+            )
+
+    def _track(self, plan: dict[str, Any], f: float, *, done: bool) -> None:
+        pos = plan["p0"] + f * (plan["p1"] - plan["p0"])
+        flat = np.zeros(9)
+        mujoco.mju_quat2Mat(flat, slerp(plan["quat0"], plan["quat1"], f))
+        rot = flat.reshape(3, 3)
+        whole = plan["whole_body"]
+        q, pos_err, rot_err = self.tracker.step(plan["q"], pos, rot, whole_body=whole)
+        if pos_err > _TRACK_POS or rot_err > _TRACK_ROT or np.abs(q - plan["q"]).max() > _JUMP:
+            q = self._full_solve(plan["q"], pos, rot, whole)
+        plan["q"] = q
+        n = self.tracker.n_base
+        self.d.ctrl[self.acts] = q[n:]
+        if whole:
+            self.d.ctrl[self.base.acts] = q[:n]
+        if done:
+            plan["q1"] = q
+
+    def _full_solve(self, q: Any, pos: Any, rot: Any, whole: bool) -> Any:
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, rot.ravel())
+        w, x, y, z = (float(v) for v in quat)
+        target = TcpTarget(
+            position=(float(pos[0]), float(pos[1]), float(pos[2])), quat=(w, x, y, z)
+        )
+        q0 = dict(zip(self.tracker.chain, q, strict=True))
+        try:
+            result = self.fallback.solve(q0, target, whole_body=whole)
+        except UnreachableError as exc:
+            raise UnreachableError(
+                position_error=exc.position_error,
+                orientation_error=exc.orientation_error,
+                iterations=exc.iterations,
+                solver="tracker+dls",
+                joints=exc.joints,
+                whole_body=whole,
+            ) from None
+        q_new = np.array(
+            [result.joints.get(j, v) for j, v in zip(self.tracker.chain, q, strict=True)]
+        )
+        if np.abs(q_new - q).max() > 3 * _JUMP:
+            raise UnreachableError(
+                position_error=math.nan,
+                orientation_error=math.nan,
+                iterations=result.iterations,
+                solver="tracker+dls",
+                joints=result.joints,
+                whole_body=whole,
+            )
+        return q_new
+
+    # ------------------------------------------------------------------ hooks
+    def done(self, job: Job, result: Any = None, error: BaseException | None = None) -> None:
+        if job is self.job and self.base.owner == self.label:
+            self.base.owner = ""
+        super().done(job, result, error)
+
+    def hold(self) -> None:
+        self.d.ctrl[self.acts] = self.d.qpos[self.qadr]
+        if self.base.owner == self.label:
+            self.base.hold()
+
+    def settled(self) -> bool:
+        return float(np.abs(self.d.qvel[self.dadr]).max()) < 0.02
+
+    def state(self) -> ArmState:
+        q = self.d.qpos[self.qadr]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, self.d.site_xmat[self.site])
+        return ArmState(
+            joints={n: float(v) for n, v in zip(self.short, q, strict=True)},
+            tcp=pose_of(self.d.site_xpos[self.site], quat),
+            moving=self.job is not None,
+        )

@@ -1,0 +1,200 @@
+"""The simulation proper, run in the simulation thread: model, data, controllers, batches.
+
+:class:`Plant` is synchronous and not thread-safe by design: :class:`~device_drivers.world.
+SimWorld` calls it only through ``anyio.to_thread.run_sync`` with a ``CapacityLimiter(1)``,
+so at most one thread touches ``MjModel``/``MjData`` at any time, and the event loop never does.
+
+One batch (:meth:`Plant.run_batch`) = start the queued jobs, then for each control tick: the
+active controllers update their set-points, ``mj_step(m, d, nstep=steps_per_tick)`` (which
+releases the GIL), the recorder samples; finally ``check_state`` (divergence ->
+:class:`SimulationDivergedError`) and a :class:`~device_drivers.scene_facts.Snapshot` of copies.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+import mujoco
+import numpy as np
+
+from device_drivers.appliance_control import ApplianceController
+from device_drivers.arm_control import ArmController
+from device_drivers.base_control import BaseController
+from device_drivers.control import Controller, DeviceKey, Job
+from device_drivers.errors import DeviceUnavailableError
+from device_drivers.grasp import Grasping, GraspMode
+from device_drivers.gripper_control import GripperController
+from device_drivers.placement import footprints, resolve_placements
+from device_drivers.robot_model import TIMESTEP
+from device_drivers.robot_spec import robot_layout
+from device_drivers.scenario import Scenario
+from device_drivers.scene_facts import SceneFacts, Snapshot
+from device_drivers.scene_model import build_scene, weld_name
+from device_drivers.sensing import CameraController, PlatformController
+from device_drivers.sim_health import DEFAULT_MAX_ACCELERATION, check_state
+from device_drivers.sim_state import hold_servos, set_joint_positions
+
+if TYPE_CHECKING:
+    from device_drivers.recorder import Recorder
+
+__all__ = ["Batch", "DeviceKind", "Plant"]
+
+DeviceKind = Literal["arm", "gripper", "base", "sensor", "appliance"]
+
+
+@dataclass(frozen=True)
+class Batch:
+    finished: list[Job]
+    snapshot: Snapshot
+    ticks: int
+
+
+class Plant:
+    """One scenario's world and its device controllers (simulation thread only)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        *,
+        control_rate: float = 100.0,
+        grasp: GraspMode = "weld",
+        seed: int = 0,
+        max_acceleration: float = DEFAULT_MAX_ACCELERATION,
+        recorder: Recorder | None = None,
+    ) -> None:
+        self.scenario = scenario
+        self.spec = build_scene(scenario)
+        self.model: Any = self.spec.compile()
+        self.data: Any = mujoco.MjData(self.model)
+        m, d = self.model, self.data
+        for robot in scenario.robots:  # grippers start open
+            layout = robot_layout(robot.spec)
+            half = robot.spec.gripper_max_opening / 2
+            set_joint_positions(m, d, dict.fromkeys(layout.finger_joints, half), hold=False)
+        hold_servos(m, d)
+        self.steps_per_tick = max(1, round(1.0 / (control_rate * TIMESTEP)))
+        self.tick_time = self.steps_per_tick * TIMESTEP
+        self.max_acceleration = max_acceleration
+        self.recorder = recorder
+        self.facts = SceneFacts.build(scenario, m)
+        self.controllers: dict[DeviceKey, Controller] = {}
+        self.kinds: dict[DeviceKey, DeviceKind] = {}
+        graspable = {label: m.body(label).id for label in self.facts.graspable}
+        obstacles = footprints(scenario)
+        for robot in scenario.robots:
+            name, spec = robot.name, robot.spec
+            welds = {label: m.equality(weld_name(name, label)).id for label in graspable}
+            grasping = Grasping(m, d, robot_layout(spec), graspable, welds, grasp)
+            base = BaseController((name, "base"), f"{name}-base", m, d, spec, obstacles)
+            hand = GripperController((name, "gripper"), f"{name}-gripper", m, d, spec, grasping)
+            arm = ArmController((name, "arm"), f"{name}-arm", m, d, spec, hand, base)
+            for ctrl, kind in ((arm, "arm"), (hand, "gripper"), (base, "base")):
+                self._add(ctrl, kind)  # type: ignore[arg-type]
+        objects = self.facts.objects
+        movable = {k: v.body for k, v in objects.items() if v.kind != "appliance"}
+        for a in scenario.appliances:
+            self._add(ApplianceController((a.label, "appliance"), a, m, d, movable), "appliance")
+        placed = resolve_placements(scenario)
+        furniture = {f.label: f for f in scenario.furniture}
+        for i, s in enumerate(scenario.sensors):
+            key = (s.owner, s.device_name)
+            if s.kind == "camera":
+                sensor: Controller = CameraController(key, s, m, d, objects, seed + 1000 * i)
+            else:
+                surface = furniture[s.surface]
+                sensor = PlatformController(
+                    key, s, m, d, objects, seed + 1000 * i, surface, placed[s.surface]
+                )
+            self._add(sensor, "sensor")
+        mujoco.mj_forward(m, d)
+        self.snapshot = self._snapshot()
+
+    def _add(self, controller: Controller, kind: DeviceKind) -> None:
+        self.controllers[controller.key] = controller
+        self.kinds[controller.key] = kind
+
+    @property
+    def time(self) -> float:
+        return float(self.data.time)
+
+    def run_batch(self, ticks: int, jobs: list[Job]) -> Batch:
+        """Start ``jobs``, run ``ticks`` control ticks, check and snapshot (see module doc).
+
+        Raises:
+            SimulationDivergedError: the state diverged during the batch.
+        """
+        m, d = self.model, self.data
+        t = float(d.time)
+        for job in jobs:
+            if job.cancelled:
+                job.finish(error=DeviceUnavailableError("the command was cancelled"))
+                continue
+            self.controllers[job.device].start(job, t)
+        controllers = list(self.controllers.values())
+        recorder = self.recorder
+        for _ in range(ticks):
+            t = float(d.time)
+            for ctrl in controllers:
+                if ctrl.active:
+                    ctrl.tick(t)
+            mujoco.mj_step(m, d, nstep=self.steps_per_tick)
+            if recorder is not None:
+                recorder.sample(m, d)
+        check_state(m, d, max_acceleration=self.max_acceleration)
+        finished = [job for job in jobs if job.finished and job.cancelled]
+        for ctrl in controllers:
+            if recorder is not None:
+                for job in ctrl.finished:
+                    self._log_outcome(recorder, ctrl, job)
+            finished += ctrl.finished
+            ctrl.finished = []
+        self.snapshot = self._snapshot()
+        return Batch(finished, self.snapshot, ticks)
+
+    def _log_outcome(self, recorder: Recorder, ctrl: Controller, job: Job) -> None:
+        what = type(job.command).__name__
+        if job.error is None:
+            recorder.log_text(self.time, ctrl.key[0], f"{ctrl.label}: {what} done")
+        else:
+            text = f"{ctrl.label}: {what} failed: {job.error}"
+            recorder.log_text(self.time, ctrl.key[0], text, level="WARN")
+
+    def _snapshot(self) -> Snapshot:
+        d = self.data
+        states = {}
+        for key, ctrl in self.controllers.items():
+            state = ctrl.state()
+            if state is not None:
+                states[key] = state
+        speeds = {
+            label: float(np.linalg.norm(d.qvel[obj.free_dof : obj.free_dof + 3]))
+            for label, obj in self.facts.objects.items()
+            if obj.free_dof >= 0
+        }
+        attached = frozenset(
+            ctrl.grasp.attached
+            for ctrl in self.controllers.values()
+            if isinstance(ctrl, GripperController) and ctrl.grasp.attached
+        )
+        return Snapshot(
+            time=float(d.time),
+            states=states,
+            body_pos=d.xpos.copy(),
+            body_quat=d.xquat.copy(),
+            ctrl=d.ctrl.copy(),
+            speeds=speeds,
+            attached=attached,
+        )
+
+    def contacts(self) -> list[tuple[str, str, float]]:
+        """Bodies in contact now: (body 1, body 2, normal force in N), a copy."""
+        m, d = self.model, self.data
+        found = []
+        force = np.zeros(6)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            mujoco.mj_contactForce(m, d, i, force)
+            b1, b2 = m.body(m.geom_bodyid[con.geom1]).name, m.body(m.geom_bodyid[con.geom2]).name
+            found.append((str(b1), str(b2), float(force[0])))
+        return found

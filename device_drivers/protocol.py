@@ -1,0 +1,268 @@
+"""Wire schema of the device endpoints ``devices/<owner>/<device>/{cmd,state}`` (msgspec
+MessagePack; pure, no Zenoh).
+
+Direction by direction::
+
+    querier -> cmd    Request{schema_version, command: Command, progress_key}
+    cmd -> querier    Reply (ok) | ErrorReply (as a Zenoh *error* reply)
+    state             StateMessage, published at a modest rate (latest wins)
+    progress_key      Progress{fraction}, while a command with progress runs
+
+``Command`` is a union tagged by ``cmd``; ``Reply`` and ``StateMessage`` by ``reply``. The
+in-process simulation queues the very same command Structs, so both transports mean the same.
+Messages only gain fields with defaults (an older client keeps working). An :class:`ErrorReply`
+carries the device-layer exception class name as ``code`` and its attributes in ``details``;
+:func:`error_from_reply` rebuilds the exception, so ``except GraspLostError`` works remotely.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, TypeAlias
+
+import msgspec
+from msgspec import Meta, Struct
+
+from device_drivers import errors
+from device_drivers.interfaces import (
+    ApplianceState,
+    ArmState,
+    BaseState,
+    Detection,
+    GripperState,
+    WorldPose,
+)
+from device_drivers.robot_spec import Pose2D
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "ApplianceStateReply",
+    "ArmStateReply",
+    "BaseStateReply",
+    "CloseGripper",
+    "Closed",
+    "Command",
+    "Describe",
+    "Detect",
+    "Detections",
+    "DeviceInfo",
+    "DeviceKind",
+    "Done",
+    "ErrorReply",
+    "GetState",
+    "GoTo",
+    "GripperStateReply",
+    "Heat",
+    "MoveJoints",
+    "MoveTcp",
+    "OpenGripper",
+    "Press",
+    "Progress",
+    "Reply",
+    "Request",
+    "SetDoor",
+    "StateMessage",
+    "Stop",
+    "decode_reply",
+    "decode_request",
+    "encode",
+    "error_from_reply",
+    "error_reply",
+]
+
+SCHEMA_VERSION = 1
+DeviceKind = Literal["arm", "gripper", "base", "sensor", "appliance"]
+Seconds = Annotated[float, Meta(gt=0, le=3600)]
+
+
+class _Cmd(Struct, frozen=True, tag_field="cmd"):
+    pass
+
+
+class GetState(_Cmd, tag="state", frozen=True):
+    """Any device: its state (a sensor has none: ``Done``)."""
+
+
+class Stop(_Cmd, tag="stop", frozen=True):
+    """Any device: halt and hold (the reply comes once it is halted)."""
+
+
+class Describe(_Cmd, tag="describe", frozen=True):
+    """Any device: what it is (``DeviceInfo``)."""
+
+
+class MoveJoints(_Cmd, tag="move_joints", frozen=True):
+    target: dict[str, float]
+    """Joint name (``elbow`` or ``r1/elbow``) -> rad; joints left out keep their set-point."""
+    duration: Seconds | None = None
+
+
+class MoveTcp(_Cmd, tag="move_tcp", frozen=True):
+    target: WorldPose
+    straight: bool = True
+    speed: Annotated[float, Meta(gt=0, le=2)] = 0.2
+    whole_body: bool = False
+    final: dict[str, float] = {}
+    """Filled by the arm driver: the IK solution of ``target`` it checked first."""
+
+
+class OpenGripper(_Cmd, tag="open", frozen=True):
+    width: Annotated[float, Meta(ge=0, le=1)] | None = None
+
+
+class CloseGripper(_Cmd, tag="close", frozen=True):
+    force: Annotated[float, Meta(gt=0, le=1000)] = 20.0
+
+
+class GoTo(_Cmd, tag="go_to", frozen=True):
+    target: Pose2D
+    speed: Annotated[float, Meta(gt=0, le=3)] = 0.5
+
+
+class Detect(_Cmd, tag="detect", frozen=True):
+    pass
+
+
+class SetDoor(_Cmd, tag="set_door", frozen=True):
+    open: bool
+
+
+class Heat(_Cmd, tag="heat", frozen=True):
+    duration: Seconds
+    power: Annotated[float, Meta(gt=0, le=1)] = 1.0
+
+
+class Press(_Cmd, tag="press", frozen=True):
+    button: Literal["start", "stop", "open"]
+
+
+Command: TypeAlias = (
+    GetState
+    | Stop
+    | Describe
+    | MoveJoints
+    | MoveTcp
+    | OpenGripper
+    | CloseGripper
+    | GoTo
+    | Detect
+    | SetDoor
+    | Heat
+    | Press
+)
+
+
+class Request(Struct, frozen=True, kw_only=True):
+    command: Command
+    schema_version: int = SCHEMA_VERSION
+    progress_key: str = ""
+    """If set, the server publishes :class:`Progress` on this key while the command runs."""
+
+
+class _Reply(Struct, frozen=True, tag_field="reply"):
+    pass
+
+
+class Done(_Reply, tag="done", frozen=True):
+    pass
+
+
+class ArmStateReply(_Reply, tag="arm_state", frozen=True):
+    state: ArmState
+
+
+class GripperStateReply(_Reply, tag="gripper_state", frozen=True):
+    state: GripperState
+
+
+class BaseStateReply(_Reply, tag="base_state", frozen=True):
+    state: BaseState
+
+
+class ApplianceStateReply(_Reply, tag="appliance_state", frozen=True):
+    state: ApplianceState
+
+
+class Closed(_Reply, tag="closed", frozen=True):
+    state: GripperState
+
+
+class Detections(_Reply, tag="detections", frozen=True):
+    items: list[Detection]
+
+
+class DeviceInfo(_Reply, tag="info", frozen=True):
+    kind: DeviceKind
+    label: str
+    owner: str
+    device: str
+
+
+StateMessage: TypeAlias = ArmStateReply | GripperStateReply | BaseStateReply | ApplianceStateReply
+Reply: TypeAlias = Done | StateMessage | Closed | Detections | DeviceInfo
+
+
+class Progress(Struct, frozen=True):
+    fraction: float
+
+
+class ErrorReply(Struct, frozen=True, kw_only=True):
+    """An error reply: ``code`` is the exception class name (``MotionTimeoutError``)."""
+
+    code: str
+    message: str
+    details: dict[str, Any] = {}
+    schema_version: int = SCHEMA_VERSION
+
+
+_ENCODER = msgspec.msgpack.Encoder()
+_REQUEST = msgspec.msgpack.Decoder(Request)
+_REPLY = msgspec.msgpack.Decoder(Reply)
+_ERROR = msgspec.msgpack.Decoder(ErrorReply)
+_DETAILS = {
+    "UnreachableError": ("position_error", "orientation_error", "iterations", "solver", "joints"),
+    "SimulationDivergedError": ("time", "culprit", "field"),
+}
+
+
+def encode(message: object) -> bytes:
+    return _ENCODER.encode(message)
+
+
+def decode_request(payload: bytes) -> Request:
+    """Raises ``msgspec.ValidationError`` / ``DecodeError`` naming the bad field."""
+    return _REQUEST.decode(payload)
+
+
+def decode_reply(payload: bytes) -> Reply:
+    reply: Reply = _REPLY.decode(payload)
+    return reply
+
+
+def error_reply(exc: BaseException) -> ErrorReply:
+    """The reply for ``exc``: device-layer errors keep their class and attributes; anything
+    else travels as ``DeviceError`` with its type in the message."""
+    if isinstance(exc, errors.DeviceError):
+        names = _DETAILS.get(type(exc).__name__, ())
+        details = {n: getattr(exc, n) for n in names if hasattr(exc, n)}
+        return ErrorReply(code=type(exc).__name__, message=str(exc), details=details)
+    if isinstance(exc, msgspec.ValidationError | msgspec.DecodeError):
+        return ErrorReply(code="CommandError", message=f"bad request: {exc}")
+    return ErrorReply(code="DeviceError", message=f"{type(exc).__name__}: {exc}")
+
+
+def error_from_reply(payload: bytes) -> errors.DeviceError:
+    """The exception an error reply stands for (``DeviceUnavailableError`` for a payload that
+    is not an :class:`ErrorReply`, e.g. a server that stopped before answering)."""
+    try:
+        reply = _ERROR.decode(payload)
+    except (msgspec.ValidationError, msgspec.DecodeError):
+        text = payload.decode("utf-8", errors="replace")
+        return errors.DeviceUnavailableError(f"the device server failed: {text}")
+    cls = getattr(errors, reply.code, None)
+    if not (isinstance(cls, type) and issubclass(cls, errors.DeviceError)):
+        cls = errors.DeviceError
+    exc = cls.__new__(cls)
+    Exception.__init__(exc, reply.message)
+    for name, value in reply.details.items():
+        setattr(exc, name, value)
+    return exc

@@ -1,0 +1,262 @@
+"""Rerun recording of a simulated world: geometry once, body poses and joint states batched.
+
+Costs measured here (notes/sim.md): one ``rr.log(Transform3D)`` is ~50 us, so logging every
+body every step would cost ~50x the physics. So: geometry is logged once as static data (one
+archetype per body and geom kind, in body frames); poses of the bodies that can move are
+sampled at ``rate`` Hz of simulated time into numpy buffers and sent with one
+``send_columns`` per body every ``flush_every`` simulated seconds; joint positions and the
+gripper opening likewise (one multi-series ``Scalars`` entity per robot). Command outcomes
+are ``TextLog`` lines. All data is on the ``sim_time`` timeline.
+
+Threads: :meth:`Recorder.start`, :meth:`sample` and :meth:`log_text` run in the simulation
+thread (they read ``MjData``); rerun's SDK batches and ships on its own threads. Camera images
+(optional) are rendered on a thread this recorder owns (:mod:`device_drivers.camera_images`),
+because an OpenGL context belongs to the thread that made it. The recording is an instance
+(``rr.RecordingStream``), never rerun's global one.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+import rerun as rr
+
+__all__ = ["Recorder"]
+
+_log = logging.getLogger(__name__)
+_TIMELINE = "sim_time"
+
+
+def _entity(name: str) -> str:
+    return "world/" + (name.replace("/", ".") or "world")
+
+
+class Recorder:
+    """A rerun recording of one world. ``path``: write an ``.rrd`` file; ``connect``: stream
+    to a viewer (``rerun+http://HOST:9876/proxy``); both may be given. ``images``: also record
+    the scenario's cameras (``width`` x ``height`` at ``image_rate`` Hz, needs EGL)."""
+
+    def __init__(
+        self,
+        *,
+        path: str | Path | None = None,
+        connect: str | None = None,
+        rate: float = 25.0,
+        flush_every: float = 1.0,
+        images: bool = False,
+        image_rate: float = 2.0,
+        application: str = "skimesh",
+        recording_id: str | None = None,
+    ) -> None:
+        self.rec = rr.RecordingStream(application, recording_id=recording_id)
+        sinks: list[Any] = []
+        if connect:
+            sinks.append(rr.GrpcSink(connect))
+        if path is not None:
+            sinks.append(rr.FileSink(str(path)))
+        if sinks:
+            self.rec.set_sinks(*sinks)
+        self.period = 1.0 / rate
+        self.flush_every = flush_every
+        self.images = images
+        self.image_rate = image_rate
+        self._next = 0.0
+        self._times: list[float] = []
+        self._pos: list[np.ndarray[Any, Any]] = []
+        self._quat: list[np.ndarray[Any, Any]] = []
+        self._joints: list[np.ndarray[Any, Any]] = []
+        self._moving: np.ndarray[Any, Any] = np.zeros(0, dtype=int)
+        self._names: list[str] = []
+        self._robots: list[tuple[str, np.ndarray[Any, Any], int]] = []
+        self._camera: Any = None
+        self.samples = 0
+
+    # ------------------------------------------------------------------ simulation thread
+    def start(self, model: Any, data: Any, *, cameras: list[str] | None = None) -> None:
+        """Log the geometry (static) and choose the bodies to follow; before stepping."""
+        mujoco.mj_forward(model, data)
+        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for body in range(model.nbody):
+            self._log_geoms(model, body)
+        self._names = [str(model.body(b).name) for b in range(model.nbody)]
+        self._moving = np.array(
+            [b for b in range(1, model.nbody) if model.body_weldid[b] != 0], dtype=int
+        )
+        static = [b for b in range(1, model.nbody) if model.body_weldid[b] == 0]
+        for b in static:
+            self.rec.log(_entity(self._names[b]), self._transform(data, b), static=True)
+        self._robots = self._robot_joints(model)
+        for robot, _adr, _act in self._robots:
+            names = [*self._joint_names(model, robot), "gripper_opening"]
+            self.rec.log(f"robots/{robot}/joints", rr.SeriesLines(names=names), static=True)
+        if self.images and cameras:
+            from device_drivers.camera_images import CameraThread
+
+            self._camera = CameraThread(self.rec, model, cameras, self.image_rate)
+        self.sample(model, data)
+
+    def sample(self, model: Any, data: Any) -> None:
+        """Buffer the state if a sample is due; flush full buffers (every control tick)."""
+        t = float(data.time)
+        if t + 1e-9 < self._next:
+            return
+        self._next = t + self.period
+        self._times.append(t)
+        self._pos.append(data.xpos[self._moving].copy())
+        self._quat.append(data.xquat[self._moving][:, [1, 2, 3, 0]].copy())  # to x, y, z, w
+        self._joints.append(
+            np.concatenate(
+                [np.append(data.qpos[adr], data.ten_length[ten]) for _, adr, ten in self._robots]
+            )
+            if self._robots
+            else np.zeros(0)
+        )
+        self.samples += 1
+        if self._camera is not None:
+            self._camera.offer(t, data)
+        if t - self._times[0] >= self.flush_every:
+            self.flush()
+
+    def log_text(self, t: float, entity: str, text: str, level: str = "INFO") -> None:
+        self.rec.set_time(_TIMELINE, duration=t)
+        self.rec.log(f"events/{entity}", rr.TextLog(text, level=level))
+
+    def flush(self) -> None:
+        """Send the buffered samples (one ``send_columns`` per followed body and robot)."""
+        if not self._times:
+            return
+        times = rr.TimeColumn(_TIMELINE, duration=np.array(self._times))
+        pos, quat = np.stack(self._pos), np.stack(self._quat)
+        for i, body in enumerate(self._moving):
+            self.rec.send_columns(
+                _entity(self._names[body]),
+                indexes=[times],
+                columns=rr.Transform3D.columns(translation=pos[:, i], quaternion=quat[:, i]),
+            )
+        joints, start = np.stack(self._joints), 0
+        for robot, adr, _ten in self._robots:
+            width = len(adr) + 1
+            block = joints[:, start : start + width]
+            start += width
+            self.rec.send_columns(
+                f"robots/{robot}/joints",
+                indexes=[times],
+                columns=rr.Scalars.columns(scalars=block.ravel()).partition([width] * len(block)),
+            )
+        self._times, self._pos, self._quat, self._joints = [], [], [], []
+
+    def close(self) -> None:
+        """Flush everything and stop the image thread (idempotent)."""
+        self.flush()
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None
+        self.rec.flush()
+
+    # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _transform(data: Any, body: int) -> rr.Transform3D:
+        w, x, y, z = data.xquat[body]
+        return rr.Transform3D(
+            translation=data.xpos[body], quaternion=rr.Quaternion(xyzw=[x, y, z, w])
+        )
+
+    @staticmethod
+    def _robot_joints(model: Any) -> list[tuple[str, np.ndarray[Any, Any], int]]:
+        """(robot, qpos addresses of its base and arm joints, its gripper tendon) per robot."""
+        found = []
+        for t in range(model.ntendon):
+            name = str(model.tendon(t).name)
+            if not name.endswith("/gripper"):
+                continue
+            robot = name.rsplit("/", 1)[0]
+            joints = _robot_joints(model, robot)
+            adr = np.array([model.jnt_qposadr[j] for j in joints], dtype=int)
+            found.append((robot, adr, t))
+        return found
+
+    @staticmethod
+    def _joint_names(model: Any, robot: str) -> list[str]:
+        return [
+            str(model.joint(j).name).removeprefix(robot + "/") for j in _robot_joints(model, robot)
+        ]
+
+    def _log_geoms(self, model: Any, body: int) -> None:
+        groups: dict[int, list[int]] = {}
+        for g in range(
+            model.body_geomadr[body], model.body_geomadr[body] + model.body_geomnum[body]
+        ):
+            if model.geom_rgba[g, 3] > 0:
+                groups.setdefault(int(model.geom_type[g]), []).append(g)
+        base = _entity(str(model.body(body).name))
+        for kind, geoms in groups.items():
+            size, pos = model.geom_size[geoms], model.geom_pos[geoms]
+            quat = model.geom_quat[geoms][:, [1, 2, 3, 0]]
+            colors = (np.clip(model.geom_rgba[geoms], 0, 1) * 255).astype(np.uint8)
+            shape: Any
+            if kind == mujoco.mjtGeom.mjGEOM_BOX:
+                shape = rr.Boxes3D(
+                    half_sizes=size, centers=pos, quaternions=quat, colors=colors, fill_mode="solid"
+                )
+            elif kind == mujoco.mjtGeom.mjGEOM_PLANE:
+                half = np.column_stack([size[:, 0], size[:, 1], np.full(len(geoms), 1e-3)])
+                shape = rr.Boxes3D(half_sizes=half, centers=pos, colors=colors, fill_mode="solid")
+            elif kind == mujoco.mjtGeom.mjGEOM_CYLINDER:
+                shape = rr.Cylinders3D(
+                    lengths=2 * size[:, 1],
+                    radii=size[:, 0],
+                    centers=pos,
+                    quaternions=quat,
+                    colors=colors,
+                    fill_mode="solid",
+                )
+            elif kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+                starts = np.array(
+                    [
+                        p - _rotate(q, [0.0, 0.0, s[1]])
+                        for p, q, s in zip(pos, model.geom_quat[geoms], size, strict=True)
+                    ]
+                )
+                shape = rr.Capsules3D(
+                    lengths=2 * size[:, 1],
+                    radii=size[:, 0],
+                    translations=starts,
+                    quaternions=quat,
+                    colors=colors,
+                )
+            elif kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+                radii = np.repeat(size[:, :1], 3, axis=1)
+                shape = rr.Ellipsoids3D(
+                    half_sizes=radii, centers=pos, colors=colors, fill_mode="solid"
+                )
+            else:
+                continue  # meshes etc.: the generated models have none
+            self.rec.log(
+                f"{base}/{mujoco.mjtGeom(kind).name.removeprefix('mjGEOM_').lower()}",
+                shape,
+                static=True,
+            )
+
+
+_ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+def _robot_joints(model: Any, robot: str) -> list[int]:
+    """Base and arm joints of ``robot`` (not the fingers), in model order."""
+    return [
+        j
+        for j in range(model.njnt)
+        if str(model.joint(j).name).startswith(robot + "/")
+        and int(model.jnt_type[j]) in _ONE_DOF
+        and "finger" not in str(model.joint(j).name)
+    ]
+
+
+def _rotate(quat_wxyz: Any, vec: list[float]) -> Any:
+    out = np.zeros(3)
+    mujoco.mju_rotVecQuat(out, np.asarray(vec, float), np.asarray(quat_wxyz, float))
+    return out

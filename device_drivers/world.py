@@ -1,0 +1,378 @@
+"""``SimWorld``: one MuJoCo world for a scenario, stepped in a worker thread, driven from anyio.
+
+Threading model (every crossing is here or in the modules it names):
+
+- **Event loop**: drivers, the remote server, tests. They *queue* jobs
+  (:class:`~device_drivers.control.Job`) into a ``deque`` and wait on the job's
+  ``anyio.Event``; they *read* state from the latest :class:`~device_drivers.scene_facts.
+  Snapshot` (immutable copies). The loop never touches ``MjModel``/``MjData``.
+- **Simulation thread**: :meth:`SimWorld.run` calls ``anyio.to_thread.run_sync(plant.run_batch,
+  ..., limiter=CapacityLimiter(1))`` in a loop. A batch takes the queued jobs, runs the
+  controllers at the control rate (100 Hz) between ``mj_step(m, d, nstep=5)`` calls, checks
+  the state, copies a snapshot and returns the finished jobs; back on the loop the runner sets
+  their events and calls progress callbacks. :meth:`SimWorld.call` runs any function on the
+  model through the same limiter (ground truth such as contacts, test hooks). Only one thread
+  at a time ever holds the model, whichever pool thread it is.
+- **IK threads**: :meth:`SimWorld.solve_ik` runs placo (and DLS as fallback) on each robot's
+  own solver objects through ``to_thread`` with a per-robot limiter, so checking a tool target
+  never stalls stepping.
+- **Recorder**: logs from the simulation thread (rerun's SDK batches and sends on its own
+  threads); optional camera images are rendered on a thread the recorder owns.
+
+Pacing: real time (default) runs each batch when the wall clock says its ticks are due
+(``anyio.sleep`` in between); if the simulation falls behind by more than ``slip`` seconds it
+gives up catching up and counts a slip. ``fast`` runs batches back to back, yielding to the
+loop between them. Failure: a diverged state (or any error inside a batch) stops the world;
+every waiting and later command fails with that error.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections import deque
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
+
+import anyio
+import anyio.abc
+import anyio.to_thread
+from msgspec import Meta, Struct
+
+from device_drivers.control import DeviceKey, Job
+from device_drivers.errors import DeviceError, DeviceUnavailableError, UnreachableError
+from device_drivers.grasp import GraspMode
+from device_drivers.ik import IKResult, TcpTarget
+from device_drivers.interfaces import ProgressCallback, WorldPose
+from device_drivers.motion_math import quat_wxyz
+from device_drivers.plant import Batch, DeviceKind, Plant
+from device_drivers.protocol import Command, Stop
+from device_drivers.scenario import Scenario
+from device_drivers.scene_facts import Snapshot, object_in
+
+if TYPE_CHECKING:
+    from device_drivers.ik_dls import DlsIK
+    from device_drivers.ik_placo import PlacoIK
+    from device_drivers.recorder import Recorder
+
+__all__ = ["SimWorld", "WorldOptions", "WorldStatistics", "running_world"]
+
+T = TypeVar("T")
+_log = logging.getLogger(__name__)
+_HALT_WAIT = 2.0  # wall seconds a cancelled motion waits for its halt
+
+
+class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    fast: bool = False
+    """As fast as possible instead of real time."""
+    control_rate: Annotated[float, Meta(ge=10, le=500)] = 100.0
+    batch: Annotated[float, Meta(gt=0, le=1)] = 0.05
+    """Largest simulated time per batch, s (real time runs what is due, up to this)."""
+    slip: Annotated[float, Meta(gt=0)] = 0.25
+    grasp: GraspMode = "weld"
+    seed: int = 0
+    max_acceleration: Annotated[float, Meta(gt=0)] = 1e6
+
+
+class WorldStatistics(Struct, frozen=True):
+    sim_time: float
+    wall_time: float
+    real_time_factor: float
+    batches: int
+    ticks: int
+    slips: int
+    busy: float
+    """Wall seconds spent inside batches."""
+
+
+class SimWorld:
+    """See the module doc. Build with :meth:`create` (or :func:`running_world`), start with
+    :meth:`run` in a task group."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        options: WorldOptions | None = None,
+        recorder: Recorder | None = None,
+    ) -> None:
+        """Blocking (~0.1-0.5 s: builds and compiles the model, IK solvers): call it through
+        :meth:`create` from async code."""
+        self.options = options or WorldOptions()
+        self.scenario = scenario
+        o = self.options
+        self.plant = Plant(
+            scenario,
+            control_rate=o.control_rate,
+            grasp=o.grasp,
+            seed=o.seed,
+            max_acceleration=o.max_acceleration,
+            recorder=recorder,
+        )
+        self.recorder = recorder
+        self.facts = self.plant.facts
+        self._limiter = anyio.CapacityLimiter(1)
+        self._inbox: deque[Job] = deque()
+        self._waiting: set[Job] = set()
+        self._snapshot = self.plant.snapshot
+        self._failure: BaseException | None = None
+        self._stopped = anyio.Event()
+        self._alarms: list[tuple[float, anyio.Event]] = []
+        self._ik: dict[str, tuple[PlacoIK, DlsIK]] = {}
+        self._ik_limiters = {r.name: anyio.CapacityLimiter(1) for r in scenario.robots}
+        self._stats = {"batches": 0, "ticks": 0, "slips": 0, "busy": 0.0, "wall0": 0.0}
+        if recorder is not None:  # still in the constructing thread: nothing steps yet
+            cameras = [
+                f"{c.mount}/{c.site}" if c.mount else c.label
+                for c in scenario.sensors
+                if c.kind == "camera"
+            ]
+            recorder.start(self.plant.model, self.plant.data, cameras=cameras)
+
+    @classmethod
+    async def create(
+        cls,
+        scenario: Scenario,
+        options: WorldOptions | None = None,
+        recorder: Recorder | None = None,
+    ) -> SimWorld:
+        """Build the world in a worker thread (the loop keeps running)."""
+        return await anyio.to_thread.run_sync(cls, scenario, options, recorder)
+
+    # ------------------------------------------------------------------ the runner
+    async def run(
+        self, *, task_status: anyio.abc.TaskStatus[None] = anyio.TASK_STATUS_IGNORED
+    ) -> None:
+        """Step until cancelled or failed (see module doc). Returns after a failure, with every
+        waiting command failed; never raises it (read :attr:`failure`)."""
+        o, plant = self.options, self.plant
+        max_ticks = max(1, round(o.batch / plant.tick_time))
+        wall0, sim0 = time.perf_counter(), plant.time
+        self._stats["wall0"] = wall0
+        task_status.started()
+        try:
+            while self._failure is None:
+                if o.fast:
+                    ticks = max_ticks
+                    await anyio.lowlevel.checkpoint()
+                else:
+                    behind = (time.perf_counter() - wall0) - (self._snapshot.time - sim0)
+                    if behind > o.slip:
+                        self._stats["slips"] += 1
+                        wall0 += behind - plant.tick_time
+                        behind = plant.tick_time
+                    ticks = min(max_ticks, math.floor(behind / plant.tick_time + 1e-9))
+                    if ticks < 1:
+                        await anyio.sleep(plant.tick_time - behind)
+                        continue
+                jobs = [self._inbox.popleft() for _ in range(len(self._inbox))]
+                started = time.perf_counter()
+                try:
+                    batch = await anyio.to_thread.run_sync(
+                        plant.run_batch, ticks, jobs, limiter=self._limiter
+                    )
+                except Exception as exc:  # divergence, or a bug in a controller
+                    _log.error("simulation stopped: %s", exc)
+                    self._fail(exc, jobs)
+                    return
+                self._stats["busy"] += time.perf_counter() - started
+                self._complete(batch)
+        finally:
+            if self._failure is None:
+                self._fail(DeviceUnavailableError("the simulation was stopped"), [])
+
+    def _complete(self, batch: Batch) -> None:
+        self._snapshot = batch.snapshot
+        self._stats["batches"] += 1
+        self._stats["ticks"] += batch.ticks
+        for job in batch.finished:
+            self._waiting.discard(job)
+            job.done.set()
+        if self._alarms:
+            due = [a for a in self._alarms if a[0] <= batch.snapshot.time]
+            for alarm in due:
+                self._alarms.remove(alarm)
+                alarm[1].set()
+        for job in self._waiting:
+            if job.on_progress is not None and job.progress != job.reported:
+                job.reported = job.progress
+                job.on_progress(job.progress)
+
+    def _fail(self, error: BaseException, started: list[Job]) -> None:
+        self._failure = error
+        for job in [*self._waiting, *started, *self._inbox]:
+            if not job.finished:
+                job.finish(error=error)
+            job.done.set()
+        self._waiting.clear()
+        self._inbox.clear()
+        for _, alarm in self._alarms:
+            alarm.set()
+        self._stopped.set()
+
+    @property
+    def failure(self) -> BaseException | None:
+        """Why the world stopped (``None`` while it runs)."""
+        return self._failure
+
+    async def wait_stopped(self) -> BaseException | None:
+        """Wait until the world stops; return why."""
+        await self._stopped.wait()
+        return self._failure
+
+    async def wait_time(self, sim_time: float) -> None:
+        """Wait until the simulation clock reaches ``sim_time`` s (or the world stops)."""
+        if self._snapshot.time >= sim_time or self._failure is not None:
+            return
+        alarm = anyio.Event()
+        self._alarms.append((sim_time, alarm))
+        await alarm.wait()
+
+    async def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` of simulated time."""
+        await self.wait_time(self._snapshot.time + seconds)
+
+    # ------------------------------------------------------------------ commands
+    async def execute(
+        self, device: DeviceKey, command: Command, progress: ProgressCallback | None = None
+    ) -> Any:
+        """Queue ``command`` for ``device`` and wait for its outcome. Cancelling the caller
+        halts the device (it holds where it is) before the cancellation propagates."""
+        if device not in self.plant.controllers:
+            raise DeviceUnavailableError(f"no device {device[0]}/{device[1]} in this world")
+        if self._failure is not None:
+            raise self._failure
+        job = Job(device, command, progress)
+        self._inbox.append(job)
+        self._waiting.add(job)
+        try:
+            await job.done.wait()
+        except anyio.get_cancelled_exc_class():
+            job.cancelled = True
+            with anyio.CancelScope(shield=True), anyio.move_on_after(_HALT_WAIT):
+                await self.halt(device)
+            raise
+        if job.error is not None:
+            raise job.error
+        if progress is not None and job.reported < 1.0:
+            progress(1.0)
+        return job.result
+
+    async def halt(self, device: DeviceKey) -> None:
+        """Stop ``device`` and wait until it holds still (quietly if the world has stopped)."""
+        if self._failure is not None:
+            return
+        try:
+            await self.execute(device, Stop())
+        except DeviceError:
+            if self._failure is None:
+                raise
+
+    def state(self, device: DeviceKey) -> Any:
+        """The device's state in the latest snapshot."""
+        try:
+            return self._snapshot.states[device]
+        except KeyError:
+            raise DeviceUnavailableError(
+                f"no device {device[0]}/{device[1]} with a state"
+            ) from None
+
+    @property
+    def snapshot(self) -> Snapshot:
+        return self._snapshot
+
+    @property
+    def devices(self) -> dict[DeviceKey, DeviceKind]:
+        return dict(self.plant.kinds)
+
+    def label(self, device: DeviceKey) -> str:
+        return self.plant.controllers[device].label
+
+    async def call(self, fn: Callable[[Any, Any], T]) -> T:
+        """Run ``fn(model, data)`` in the simulation thread, between batches."""
+        plant = self.plant
+        return await anyio.to_thread.run_sync(fn, plant.model, plant.data, limiter=self._limiter)
+
+    # ------------------------------------------------------------------ IK
+    async def solve_ik(self, robot: str, target: WorldPose, *, whole_body: bool) -> IKResult:
+        """Joint values putting ``robot``'s tool at ``target`` from its present set-points:
+        placo, then DLS if placo fails. Runs on an IK thread (see module doc).
+
+        Raises:
+            UnreachableError: neither solver converged (the smaller residual is reported).
+        """
+        arm = self.plant.controllers[(robot, "arm")]
+        base = self.plant.controllers[(robot, "base")]
+        q0 = {**self._setpoints(base), **self._setpoints(arm)}
+        w, x, y, z = (float(v) for v in quat_wxyz(target))
+        goal = TcpTarget(position=(target.x, target.y, target.z), quat=(w, x, y, z))
+        return await anyio.to_thread.run_sync(
+            self._solve, robot, q0, goal, whole_body, limiter=self._ik_limiters[robot]
+        )
+
+    def _setpoints(self, ctrl: Any) -> dict[str, float]:
+        values = self._snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
+        return {j: float(v) for j, v in zip(ctrl.joints, values, strict=True)}
+
+    def _solve(self, robot: str, q0: dict[str, float], goal: TcpTarget, whole: bool) -> IKResult:
+        if robot not in self._ik:
+            from device_drivers.ik import IKOptions
+            from device_drivers.ik_dls import DlsIK
+            from device_drivers.ik_placo import PlacoIK
+
+            spec = self.scenario.robot(robot).spec
+            opts = IKOptions(position_tolerance=2e-4, orientation_tolerance=2e-3)
+            self._ik[robot] = (PlacoIK.for_robot(spec, opts), DlsIK.for_robot(spec, opts))
+        placo, dls = self._ik[robot]
+        try:
+            return placo.solve(q0, goal, whole_body=whole)
+        except UnreachableError as first:
+            try:
+                return dls.solve(q0, goal, whole_body=whole)
+            except UnreachableError as second:
+                raise min(first, second, key=lambda e: e.position_error) from None
+
+    # ------------------------------------------------------------------ ground truth
+    def body_pose(self, name: str) -> WorldPose:
+        """World pose of a body (a label, or ``r1/gripper``) in the latest snapshot."""
+        return self._snapshot.pose(self.facts.body(name))
+
+    def object_in(self, label: str, container: str) -> bool:
+        """Whether ``label`` lies in ``container`` now, at rest and not held."""
+        return object_in(self._snapshot, self.facts, label, container)
+
+    def objects_in(self, container: str) -> list[str]:
+        return [o for o in self.facts.objects if o != container and self.object_in(o, container)]
+
+    async def contacts(self) -> list[tuple[str, str, float]]:
+        """Bodies in contact now, with normal forces (computed in the simulation thread)."""
+        return await anyio.to_thread.run_sync(self.plant.contacts, limiter=self._limiter)
+
+    def statistics(self) -> WorldStatistics:
+        s = self._stats
+        wall = time.perf_counter() - s["wall0"] if s["wall0"] else 0.0
+        sim = self._snapshot.time
+        return WorldStatistics(
+            sim_time=sim,
+            wall_time=wall,
+            real_time_factor=sim / wall if wall > 0 else math.nan,
+            batches=int(s["batches"]),
+            ticks=int(s["ticks"]),
+            slips=int(s["slips"]),
+            busy=float(s["busy"]),
+        )
+
+
+@asynccontextmanager
+async def running_world(
+    scenario: Scenario, options: WorldOptions | None = None, recorder: Recorder | None = None
+) -> AsyncIterator[SimWorld]:
+    """Build ``scenario``'s world (in a worker thread) and step it while the block runs."""
+    world = await SimWorld.create(scenario, options, recorder)
+    async with anyio.create_task_group() as tg:
+        await tg.start(world.run)
+        try:
+            yield world
+        finally:
+            tg.cancel_scope.cancel()

@@ -1,0 +1,429 @@
+"""Skill parameters: :func:`specify` them for a run, :func:`check_description` at load.
+
+A parameter's ``type`` is a *value kind* (:data:`VALUE_KINDS`) or an ontology class (an
+*element parameter*: its value is an element id). Value kinds: ``float`` (an int is accepted
+and becomes a float), ``int`` and ``bool`` (a bool is not an int), ``str``/``string``,
+``list``, ``any``, the typed values by struct name (``Pose``, ``Position``, ``Orientation``,
+``Frame``, ``SizeCuboid``, ``SizeCylinder``, ``SizeSphere``, ``Color``) and ``Size`` (any
+of the three sizes).
+
+:func:`specify` turns the values of a start request into every parameter's value:
+
+- a name the skill does not have -> UnknownParameterError naming the closest;
+- a given value is checked: its kind (ParameterTypeError), or for an element parameter that
+  the element exists (ParameterError listing the elements of the class), is of the class
+  (subclasses fit) and matches the partial definition (ParameterTypeError), and for a
+  hardware parameter, when ``robot`` is known, that it is a device of this agent;
+- a missing value takes the parameter's ``default``; an ``optional`` one may stay None (an
+  optional element parameter is not inferred); a required value parameter without default
+  -> UnspecifiedParameterError (never a crash later, SkiROS2 #91);
+- a missing hardware parameter takes the device ``hardware[name]``, else this agent's device
+  of that class (the ``hardware`` values and the robot's ``hasA`` parts; several -> the first
+  by id, and the reason says so);
+- a missing element parameter is inferred (:mod:`skill_agent.inference`), afresh on every
+  call; ``Specified.inferred`` holds the reason for each value chosen automatically.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Mapping
+from types import MappingProxyType
+from typing import Final
+
+import msgspec
+
+from wm_store.errors import WmError
+from wm_store.ontology import Ontology
+from wm_store.ontology_model import TYPED_KINDS, did_you_mean, kind_of, with_article
+from wm_store.protocol import Pose, Position, Value
+from wm_store.query import id_sort_key
+
+from .conditions import ConditionRegistry, describe
+from .errors import (
+    InferenceError,
+    ParameterError,
+    ParameterTypeError,
+    SkillLoadError,
+    UnknownParameterError,
+    UnspecifiedParameterError,
+)
+from .inference import describe_query, infer, matching
+from .protocol import (
+    AndCond,
+    Condition,
+    CustomCond,
+    EmptyCond,
+    HasPropertyCond,
+    IsSpecifiedCond,
+    IsTypeCond,
+    NotCond,
+    OrCond,
+    ParamSpec,
+    PropertyCond,
+    RelationCond,
+    SkillDescription,
+)
+from .skill import WorldView
+
+__all__ = [
+    "VALUE_KINDS",
+    "Specified",
+    "check_description",
+    "check_kind",
+    "is_value_kind",
+    "specify",
+]
+
+_SIZES: Final = frozenset({"SizeCuboid", "SizeCylinder", "SizeSphere"})
+VALUE_KINDS: Final = frozenset(
+    {"float", "int", "bool", "str", "string", "list", "any", "Size", *TYPED_KINDS}
+)
+"""Parameter types that are values, not ontology classes."""
+_NO_DEVICES: Final[Mapping[str, str]] = MappingProxyType({})
+
+
+class Specified(msgspec.Struct, frozen=True):
+    """Every parameter's value (None: an optional one left out), and why each inferred
+    parameter got its value."""
+
+    values: dict[str, Value]
+    inferred: dict[str, str]
+
+
+def _closest(name: str, pool: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` or ""."""
+    hint = did_you_mean(name, pool)
+    return "" if hint == "." else f" ({hint[2:]})"
+
+
+def is_value_kind(type_name: str) -> bool:
+    """True if a parameter of this type holds a value, False if it holds an element id."""
+    return type_name in VALUE_KINDS
+
+
+def check_kind(spec: ParamSpec, value: Value) -> Value:
+    """``value`` if it fits the value kind of ``spec`` (an int becomes a float for ``float``),
+    else ParameterTypeError."""
+    t = spec.type
+    kind = kind_of(value)
+    if (
+        t == "any"
+        or (t == "list" and isinstance(value, list))
+        or (t in ("str", "string") and kind == "string")
+        or (t in ("bool", "int") and kind == t)
+        or (t == "Size" and kind in _SIZES)
+        or (t in TYPED_KINDS and kind == t)
+    ):
+        return value
+    if t == "float" and kind in ("int", "float"):
+        return float(value)  # type: ignore[arg-type]  # kind says int or float
+    got = "a list" if isinstance(value, list) else f"{kind or type(value).__name__} {value!r}"
+    raise ParameterTypeError(f"parameter '{spec.name}' takes {with_article(t)} value, got {got}")
+
+
+def _check_element(
+    desc: SkillDescription, spec: ParamSpec, value: Value, view: WorldView, devices: list[str]
+) -> str:
+    where = f"parameter '{spec.name}' of skill '{desc.name}'"
+    if not isinstance(value, str):
+        raise ParameterTypeError(
+            f"{where} takes an element id ({with_article(spec.type)}), got {value!r}"
+        )
+    element = view.find_element(value)
+    if element is None:
+        known = [e.id for e in view.resolve_element(type=spec.type)]
+        raise ParameterError(
+            f"{where}: no element {value!r} in the world model; elements of class {spec.type}: "
+            f"{', '.join(known[:10]) or 'none'}"
+        )
+    ontology = view.ontology
+    if not ontology.is_a(element.type, spec.type):
+        chain = " < ".join(ontology.superclasses(element.type))
+        raise ParameterTypeError(
+            f"{where} takes {with_article(spec.type)}; {value} is {with_article(element.type)} "
+            f"({chain})"
+        )
+    if spec.partial is not None and value not in matching(view, spec):
+        raise ParameterTypeError(
+            f"{where}: {value} does not match its partial definition "
+            f"({describe_query(spec.partial)})"
+        )
+    if spec.kind == "hardware" and devices and value not in devices:  # devices: [] w/o robot
+        mine = [d for d in devices if _is(view, d, spec.type)]
+        raise ParameterError(
+            f"{where}: {value} is not a device of this agent; its {spec.type} devices: "
+            f"{', '.join(mine) or 'none'}"
+        )
+    return value
+
+
+def _is(view: WorldView, element_id: str, cls: str) -> bool:
+    element = view.find_element(element_id)
+    return element is not None and view.ontology.is_a(element.type, cls)
+
+
+def _agent_devices(view: WorldView, hardware: Mapping[str, str], robot: str | None) -> list[str]:
+    """The ``hardware`` values, ``robot`` and every part of it reached through ``hasA``."""
+    found = set(hardware.values()) | ({robot} if robot else set())
+    todo = [robot] if robot else []
+    predicate = "hasA" if "hasA" in view.ontology.relations else "spatialRelation"
+    while todo:
+        for rel in view.query_relation(todo.pop(), predicate):
+            if rel.object not in found:
+                found.add(rel.object)
+                todo.append(rel.object)
+    return sorted(found, key=id_sort_key)
+
+
+def _pick_device(
+    desc: SkillDescription, spec: ParamSpec, view: WorldView, devices: list[str], robot: str | None
+) -> tuple[str, str]:
+    fitting = [d for d in devices if _is(view, d, spec.type)]
+    if spec.partial is not None:
+        allowed = set(matching(view, spec))
+        fitting = [d for d in fitting if d in allowed]
+    if not fitting:
+        raise InferenceError(
+            f"cannot choose hardware parameter '{spec.name}' ({with_article(spec.type)}) of "
+            f"skill '{desc.name}': this agent offers no such device (its devices: "
+            f"{', '.join(devices) or 'none'}; robot: {robot or 'not given'})"
+        )
+    if len(fitting) == 1:
+        return fitting[0], f"{fitting[0]}: this agent's only {spec.type}"
+    return fitting[0], (
+        f"{fitting[0]}: first by id of this agent's {len(fitting)} {spec.type} devices "
+        f"({', '.join(fitting)}); runner-up {fitting[1]}; give '{spec.name}' to choose another"
+    )
+
+
+def specify(
+    desc: SkillDescription,
+    given: Mapping[str, Value],
+    view: WorldView,
+    *,
+    hardware: Mapping[str, str] = _NO_DEVICES,
+    robot: str | None = None,
+    registry: ConditionRegistry | None = None,
+) -> Specified:
+    """Every parameter of ``desc`` specified for a run (see the module doc).
+
+    ``hardware``: parameter name (or any key) -> device element id offered by this agent;
+    ``robot``: the agent's robot element id (its pose ranks candidates by distance, its
+    ``hasA`` parts are the agent's devices)."""
+    names = [p.name for p in desc.parameters]
+    unknown = sorted(set(given) - set(names))
+    if unknown:
+        hints = ", ".join(f"{n!r}{_closest(n, names)}" for n in unknown)
+        raise UnknownParameterError(
+            f"skill '{desc.name}' has no parameter {hints}. Its parameters: "
+            f"{', '.join(names) or 'none'}"
+        )
+    devices = _agent_devices(view, hardware, robot)
+    known_devices = devices if robot else []  # ``hardware`` alone does not list every device
+    values: dict[str, Value] = {}
+    inferred: dict[str, str] = {}
+    pending: list[ParamSpec] = []
+    for spec in desc.parameters:
+        value = given.get(spec.name)
+        value = spec.default if value is None else value
+        element = not is_value_kind(spec.type)
+        if value is not None and element:
+            values[spec.name] = _check_element(desc, spec, value, view, known_devices)
+        elif value is not None:
+            values[spec.name] = check_kind(spec, value)
+        elif spec.optional:
+            values[spec.name] = None
+        elif not element:
+            raise UnspecifiedParameterError(
+                f"parameter '{spec.name}' ({spec.type}) of skill '{desc.name}' is required and "
+                "has no default; give it in the start request's params"
+            )
+        elif spec.kind == "hardware":
+            if spec.name in hardware:
+                values[spec.name] = _check_element(desc, spec, hardware[spec.name], view, [])
+                inferred[spec.name] = f"{hardware[spec.name]}: this agent's '{spec.name}' device"
+            else:
+                values[spec.name], inferred[spec.name] = _pick_device(
+                    desc, spec, view, devices, robot
+                )
+        else:
+            values[spec.name] = None
+            pending.append(spec)
+    if pending:
+        chosen, reasons = infer(desc, view, values, pending, robot=robot, registry=registry)
+        values.update(chosen)
+        inferred.update(reasons)
+    return Specified(values=values, inferred=inferred)
+
+
+# --------------------------------------------------------------------------- load checks
+
+
+def check_description(
+    desc: SkillDescription, ontology: Ontology, *, registry: ConditionRegistry | None = None
+) -> None:
+    """Check a description against the ontology when its skill loads; SkillLoadError lists
+    every problem (with the closest known name for each misspelling):
+
+    - parameter names are unique; each type is a value kind or a class; defaults fit;
+      hardware parameters are element parameters; a partial definition names known classes,
+      properties and relations and can match the parameter's class;
+    - conditions refer to existing parameters (element parameters where an element is meant);
+      relations, properties and classes exist; custom conditions are registered; a relation's
+      or property's parameters can satisfy its domain and range (a swapped subject and object
+      fails here); a post-condition does not predict an abstract relation.
+    """
+    params: dict[str, ParamSpec] = {}
+    problems: list[str] = []
+    for spec in desc.parameters:
+        if spec.name in params:
+            problems.append(f"parameter '{spec.name}' is declared twice")
+        params[spec.name] = spec
+        problems += [f"parameter '{spec.name}': {p}" for p in _param_problems(spec, ontology)]
+    checker = _CondChecker(params, ontology, registry)
+    for section, conds in (("pre", desc.pre), ("hold", desc.hold), ("post", desc.post)):
+        for i, cond in enumerate(conds):
+            for problem in checker.problems(cond, post=section == "post"):
+                problems.append(f"{section}[{i}] {describe(cond)}: {problem}")
+    if problems:
+        raise SkillLoadError(
+            f"skill '{desc.name}' fails its load checks:\n"
+            + "\n".join(f"  - {p}" for p in problems)
+        )
+
+
+def _related(ontology: Ontology, cls: str, allowed: Iterable[str]) -> bool:
+    """Whether some element of ``cls`` can belong to one of ``allowed``."""
+    return any(ontology.is_a(cls, a) or ontology.is_a(a, cls) for a in allowed)
+
+
+def _param_problems(spec: ParamSpec, ontology: Ontology) -> Iterator[str]:
+    if is_value_kind(spec.type):
+        if spec.kind == "hardware":
+            yield f"a hardware parameter is a device (a class), not a {spec.type} value"
+        if spec.partial is not None:
+            yield "a partial definition needs an element parameter (a class type)"
+        if spec.default is not None:
+            try:
+                check_kind(spec, spec.default)
+            except ParameterTypeError as exc:
+                yield f"bad default: {exc}"
+        return
+    if spec.type not in ontology.classes:
+        hint = _closest(spec.type, ontology.classes | VALUE_KINDS)
+        yield (
+            f"unknown type '{spec.type}'{hint}; a type is an ontology class or a value kind "
+            f"({', '.join(sorted(VALUE_KINDS))})"
+        )
+        return
+    if spec.default is not None and not isinstance(spec.default, str):
+        yield f"the default of an element parameter is an element id, not {spec.default!r}"
+    q = spec.partial
+    if q is None:
+        return
+    try:
+        if q.type and not _related(ontology, ontology.check_class(q.type), [spec.type]):
+            yield f"partial type {q.type} can never be {with_article(spec.type)}"
+        for f in q.filters:
+            ontology.data_property(f.property)
+            if f.op in ("eq", "ne") and f.value is not None:
+                ontology.check_value(f.property, f.value)
+        for rel in q.related:
+            ontology.relation(rel.predicate)
+            if "?" not in (rel.subject, rel.object):
+                yield f"partial relation {rel} needs '?' (the candidate) as subject or object"
+    except WmError as exc:
+        yield f"partial definition: {exc}"
+
+
+class _CondChecker:
+    def __init__(
+        self,
+        params: Mapping[str, ParamSpec],
+        ontology: Ontology,
+        registry: ConditionRegistry | None,
+    ) -> None:
+        self.params, self.ontology, self.registry = params, ontology, registry
+
+    def param(self, name: str) -> Iterator[str]:
+        if name not in self.params:
+            hint = _closest(name, self.params)
+            yield f"unknown parameter '{name}'{hint}; parameters: {', '.join(self.params)}"
+
+    def element(self, name: str) -> tuple[str | None, list[str]]:
+        """The class of element parameter ``name`` (None if unusable) and the problems."""
+        problems = list(self.param(name))
+        spec = self.params.get(name)
+        if spec is None or spec.type not in self.ontology.classes:
+            if spec is not None and is_value_kind(spec.type):
+                problems.append(f"parameter '{name}' is a {spec.type} value, not an element")
+            return None, problems
+        return spec.type, problems
+
+    def fits(self, name: str, roles: Mapping[str, Iterable[str]]) -> Iterator[str]:
+        """Problems of element parameter ``name`` in each role (-> the classes it allows)."""
+        cls, problems = self.element(name)
+        yield from problems
+        if cls is None:
+            return
+        for role, allowed in roles.items():
+            names = sorted(allowed)
+            if names and not _related(self.ontology, cls, names):
+                yield f"{role} must be {' or '.join(names)}; '{name}' is {with_article(cls)}"
+
+    def problems(self, cond: Condition, *, post: bool) -> Iterator[str]:
+        onto = self.ontology
+        try:
+            match cond:
+                case AndCond(items=items) | OrCond(items=items):
+                    for item in items:
+                        yield from self.problems(item, post=post)
+                case NotCond(item=item):
+                    yield from self.problems(item, post=post)
+                case IsSpecifiedCond(param=x):
+                    yield from self.param(x)
+                case CustomCond(name=name, params=names):
+                    try:
+                        (self.registry or ConditionRegistry()).get(name)
+                    except SkillLoadError as exc:
+                        yield str(exc)
+                    for x in names:
+                        yield from self.param(x)
+                case RelationCond(subject=s, predicate=p, object=o, holds=holds):
+                    info, chain = onto.relation(p), sorted(onto.superproperties(p))
+                    subject = {f"the subject of '{r}'": onto.relation(r).domains for r in chain}
+                    yield from self.fits(s, subject)
+                    obj = {f"the object of '{r}'": onto.relation(r).ranges for r in chain}
+                    yield from self.fits(o, obj)
+                    if post and holds and info.abstract:
+                        subs = sorted(onto.subproperties(p) - {p})
+                        yield f"'{p}' is abstract, so no effect can make it true; use one of {subs}"
+                case PropertyCond(param=x, property=q) | HasPropertyCond(param=x, property=q):
+                    domains = onto.data_property(q).domains
+                    yield from self.fits(x, {f"the element of property '{q}'": domains})
+                    if isinstance(cond, PropertyCond):
+                        yield from _value_problems(cond, onto)
+                case IsTypeCond(param=x, cls=cls):
+                    target = onto.check_class(cls)
+                    have, found = self.element(x)
+                    yield from found
+                    if have is not None and not _related(onto, have, [target]):
+                        yield f"'{x}' is {with_article(have)}, never {with_article(target)}"
+                case EmptyCond(param=x, predicate=p):
+                    onto.relation(p)
+                    yield from self.element(x)[1]
+        except WmError as exc:
+            yield str(exc)
+
+
+def _value_problems(cond: PropertyCond, ontology: Ontology) -> Iterator[str]:
+    v = cond.value
+    if cond.op in ("eq", "ne") and v is not None:
+        ontology.check_value(cond.property, v)
+    elif cond.op in ("lt", "le", "gt", "ge") and kind_of(v) not in ("int", "float", "string"):
+        yield f"'{cond.op}' compares numbers or strings, not {v!r}"
+    elif cond.op == "near":
+        if not (kind_of(v) in ("int", "float") or isinstance(v, Pose | Position)):
+            yield f"'near' compares numbers, positions or poses, not {v!r}"
+        if cond.tolerance < 0:
+            yield f"tolerance {cond.tolerance} is negative"

@@ -1,0 +1,52 @@
+"""Mobile-base primitives: drive to a planar pose, turn to face a point. Cancellable like every
+primitive (cancellation halts the base, then propagates). Frames and units: world frame,
+metres, radians (yaw about +z, 0 = facing +x), speeds in m/s. Path planning around furniture
+happens in the base driver, which raises :class:`~device_drivers.errors.CollisionError` when
+no free path exists."""
+
+from __future__ import annotations
+
+import math
+
+from device_drivers.interfaces import MobileBase, ProgressCallback
+from device_drivers.robot_spec import Pose2D
+
+from .poses import Vec3
+from .supervise import supervise
+
+__all__ = ["face", "navigate_to"]
+
+
+async def navigate_to(
+    base: MobileBase,
+    target: Pose2D,
+    *,
+    speed: float = 0.5,
+    progress: ProgressCallback | None = None,
+    timeout: float | None = None,
+) -> Pose2D:
+    """Drive to ``target``; returns the pose reached (as the base reports it)."""
+    await supervise(
+        base,
+        f"{base.name}: go to ({target.x:.2f}, {target.y:.2f}, yaw {target.yaw:.2f})",
+        lambda: base.go_to(target, speed=speed, progress=progress),
+        timeout=timeout,
+    )
+    return (await base.state()).pose
+
+
+async def face(
+    base: MobileBase,
+    point: Vec3,
+    *,
+    speed: float = 0.5,
+    progress: ProgressCallback | None = None,
+    timeout: float | None = None,
+) -> Pose2D:
+    """Turn in place until the base's x axis points at ``point`` (world, m): what a camera
+    looking ahead on the base needs to see it. Returns the pose reached."""
+    here = (await base.state()).pose
+    yaw = math.atan2(point[1] - here.y, point[0] - here.x)
+    return await navigate_to(
+        base, Pose2D(here.x, here.y, yaw), speed=speed, progress=progress, timeout=timeout
+    )

@@ -1,0 +1,313 @@
+"""``skimesh agent``: a skill agent served over Zenoh.
+
+This module is the skill layer's Zenoh adapter (the runtime itself, :class:`AgentCore`, knows
+no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
+
+- ``agents/<a>/skills``  queryable: :class:`~skill_agent.protocol.SkillsReply`;
+- ``agents/<a>/rpc``     queryable: one :data:`AgentRequest` -> one :data:`AgentReply`; every
+  refusal is a Zenoh *error reply* carrying an :class:`ErrorReply` (``code`` = the error class's
+  code, so the client re-raises the same class). Undecodable bytes, unknown tags and wrong
+  field types answer ``bad_request``; an unexpected exception answers ``internal``: no request
+  crashes the agent or changes state;
+- ``agents/<a>/runs/<run>/progress``  publication (BLOCK): every :data:`RunEvent` of the run,
+  ending with its :class:`RunResult`;
+- ``agents/<a>``  liveliness token, declared once the queryables are up, so whoever sees the
+  agent alive can call it.
+
+Start-up order: core running -> queryables -> token -> registration in the world model (agent,
+robot, devices, skills: :meth:`WmClient.register_robot`; the presence monitor of the store then
+keeps ``available`` equal to the token). Stop (cancellation): every run is preempted and its
+result published, then, shielded, the agent unregisters and the token is undeclared.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+from collections.abc import Awaitable, Callable
+from pathlib import Path
+
+import anyio
+import msgspec
+from anyio.abc import TaskStatus
+
+from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError
+from meshlink.keys import check_name
+from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
+from wm_store.ontology import Ontology, core_ontology_path
+
+from .config import AgentConfig
+from .core import AgentCore
+from .errors import RunStateError, SkillError, UnknownRunError
+from .events import EventLog
+from .plugins import SkillRegistry
+from .protocol import (
+    AgentReply,
+    AgentRequest,
+    ErrorReply,
+    ListRuns,
+    ListSkills,
+    OkReply,
+    PauseRun,
+    Reload,
+    ResumeRun,
+    RunEvent,
+    RunInfo,
+    RunsReply,
+    RunStatus,
+    SkillDescription,
+    SkillsReply,
+    StartRun,
+    StopRun,
+    decode_request,
+    encode,
+)
+from .simulated import SimulatedOutcomes
+
+__all__ = [
+    "AgentService",
+    "agent_registration",
+    "run_agent",
+    "serve_agent",
+    "simulated_outcomes",
+]
+
+_log = logging.getLogger(__name__)
+_json = msgspec.json.Encoder()
+
+
+class AgentService:
+    """Requests -> replies for one agent, independent of the transport (unit-testable)."""
+
+    def __init__(
+        self,
+        core: AgentCore,
+        *,
+        registry: SkillRegistry | None = None,
+        on_reload: Callable[[], Awaitable[None]] | None = None,
+    ) -> None:
+        self.core = core
+        self.registry = registry
+        self.on_reload = on_reload
+        self._reload_lock = anyio.Lock()
+
+    def skills_reply(self) -> SkillsReply:
+        return SkillsReply(
+            agent=self.core.name,
+            skills=self.core.descriptions(),
+            simulated=self.core.simulated is not None,
+        )
+
+    async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
+        """Decode, dispatch, encode. Returns ``(payload, ok)``; never raises an Exception."""
+        try:
+            request = decode_request(data)
+        except msgspec.MsgspecError as e:
+            return _error("bad_request", f"undecodable request: {e}")
+        try:
+            return encode(await self.handle(request)), True
+        except SkillError as e:
+            return _error(e.code, str(e))
+        except ValueError as e:  # e.g. a run id that is no valid key segment
+            return _error("bad_request", str(e))
+        except Exception as e:
+            _log.exception("request %s failed", type(request).__name__)
+            return _error("internal", f"{type(e).__name__}: {e}")
+
+    async def handle(self, request: AgentRequest) -> AgentReply:
+        """Answer one request; refusals raise the :mod:`skill_agent.errors` class."""
+        core = self.core
+        match request:
+            case ListSkills():
+                return self.skills_reply()
+            case StartRun(run_id=run_id):
+                if run_id:
+                    check_name(run_id, "run id")
+                return await core.start(request)
+            case StopRun(run_id=run_id):
+                result = await core.stop(run_id)
+                try:
+                    info = core.status(run_id)
+                except UnknownRunError:  # forgotten meanwhile: rebuild from the result
+                    info = RunInfo(run_id=run_id, skill=result.skill, state="preempted")
+                return RunsReply(runs=[msgspec.structs.replace(info, result=result)])
+            case PauseRun(run_id=run_id):
+                await core.pause(run_id)
+                return OkReply(message=f"run {run_id} paused")
+            case ResumeRun(run_id=run_id):
+                await core.resume(run_id)
+                return OkReply(message=f"run {run_id} resumed")
+            case RunStatus(run_id=run_id):
+                return RunsReply(runs=[core.status(run_id)])
+            case ListRuns(active_only=active_only):
+                return RunsReply(runs=core.runs(active_only=active_only))
+            case Reload():
+                return await self._reload()
+        raise RunStateError(f"unsupported request {type(request).__name__}")  # pragma: no cover
+
+    async def _reload(self) -> OkReply:
+        registry = self.registry
+        if registry is None:
+            raise RunStateError(f"agent {self.core.name} has no plug-in registry to reload")
+        async with self._reload_lock:
+            entries = await anyio.to_thread.run_sync(registry.reload)
+            self.core.replace_skills(entries)
+            if self.on_reload is not None:
+                await self.on_reload()
+        names = ", ".join(sorted(entries)) or "none"
+        _log.warning("agent %s reloaded %d skills: %s", self.core.name, len(entries), names)
+        return OkReply(message=f"reloaded {len(entries)} skills: {names}")
+
+
+def _error(code: str, message: str) -> tuple[bytes, bool]:
+    return encode(ErrorReply(code=code, message=message)), False
+
+
+def agent_registration(
+    config: AgentConfig, skills: list[SkillDescription], *, address: str = ""
+) -> RobotRegistration:
+    """What the agent writes into the world model (agent, robot, devices, skills)."""
+    return RobotRegistration(
+        agent=config.name,
+        agent_type=config.agent_type,
+        address=address,
+        hostname=socket.gethostname(),
+        robot_type=config.robot.type,
+        robot_label=config.robot_label,
+        robot_properties=dict(config.robot.properties),
+        devices=[
+            DeviceSpec(type=d.type, label=d.label, properties=d.properties) for d in config.devices
+        ],
+        skills=[
+            SkillSpec(name=d.name, skill_type=d.family, description=_json.encode(d).decode())
+            for d in skills
+        ],
+    )
+
+
+async def _register(wm: WmClient, core: AgentCore, config: AgentConfig, address: str) -> None:
+    await wm.register_robot(agent_registration(config, core.descriptions(), address=address))
+    agents = wm.resolve_element(type="Agent", label=config.name)
+    controlled = [r.object for a in agents for r in wm.query_relation(a.id, "controls")]
+    core.robot = controlled[0] if controlled else None  # its hasA devices are the hardware
+
+
+async def serve_agent(
+    mesh: Mesh,
+    core: AgentCore,
+    *,
+    config: AgentConfig,
+    wm: WmClient,
+    registry: SkillRegistry | None = None,
+    unregister_timeout: float = 5.0,
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
+) -> None:
+    """Run ``core`` and serve it on ``mesh`` until cancelled (see the module docstring);
+    ``started`` once the agent is registered and reachable.
+
+    Raises:
+        WmError: the registration was refused or the store is unreachable.
+    """
+    keys, name = mesh.keys, core.name
+    address = keys.agent(name)
+
+    async def reregister() -> None:
+        await _register(wm, core, config, address)
+
+    service = AgentService(core, registry=registry, on_reload=reregister)
+
+    async def rpc(query: IncomingQuery) -> list[Answer]:
+        data, ok = await service.handle_bytes(query.payload or b"")
+        return [Answer(key=keys.agent_rpc(name), payload=data, ok=ok)]
+
+    async def skills(_query: IncomingQuery) -> list[Answer]:
+        return [Answer(key=keys.agent_skills(name), payload=encode(service.skills_reply()))]
+
+    def publish(event: RunEvent) -> None:  # on the loop; a put is a short call (BLOCK)
+        try:
+            mesh.put(keys.run_progress(name, event.run_id), encode(event))
+        except (MeshlinkError, ValueError) as e:
+            _log.warning(
+                "could not publish %s of run %s: %s", type(event).__name__, event.run_id, e
+            )
+
+    unsubscribe = core.subscribe(publish)
+    token = None
+    try:
+        async with anyio.create_task_group() as tg:
+            await tg.start(core.run)
+            await tg.start(mesh.serve, keys.agent_skills(name), skills)
+            await tg.start(mesh.serve, keys.agent_rpc(name), rpc)
+            token = mesh.declare_token(address)
+            await reregister()
+            _log.warning(
+                "agent %s ready on mesh %r: %d skills (%s)%s",
+                name,
+                keys.mesh,
+                len(core.descriptions()),
+                ", ".join(d.name for d in core.descriptions()),
+                ", simulated outcomes" if core.simulated is not None else "",
+            )
+            task_status.started()
+    finally:
+        unsubscribe()
+        with anyio.CancelScope(shield=True):
+            if token is not None:
+                with anyio.move_on_after(unregister_timeout):
+                    try:
+                        await wm.unregister_robot(name)
+                    except WmError as e:
+                        _log.warning("agent %s could not unregister: %s", name, e)
+                token.undeclare()
+        _log.info("agent %s stopped", name)
+
+
+def _ontology(config: AgentConfig) -> Ontology:
+    if not config.ontology:
+        return Ontology.default()
+    return Ontology.load(core_ontology_path(), *(Path(p) for p in config.ontology))
+
+
+def simulated_outcomes(config: AgentConfig, *, force: bool = False) -> SimulatedOutcomes | None:
+    """The config's simulated-outcome settings, or None when the mode is off."""
+    sim = config.simulation
+    if not (force or sim.enabled):
+        return None
+    default = 1.0 if sim.default is None else sim.default
+    return SimulatedOutcomes(sim.probabilities, default, sim.seed, time_scale=sim.time_scale)
+
+
+async def run_agent(
+    mesh: Mesh,
+    config: AgentConfig,
+    *,
+    simulate: bool = False,
+    wm_timeout: float = 5.0,
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
+) -> None:
+    """Everything ``skimesh agent`` does: join the world model, load and check the skills,
+    build the core and serve it until cancelled. ``simulate`` forces simulated outcomes.
+
+    Raises:
+        SkillLoadError: a skill or the config does not load. WmError: no world model.
+    """
+    ontology = await anyio.to_thread.run_sync(_ontology, config)
+    transport = ZenohTransport(mesh)
+    async with WmClient.connect(transport, ontology, author=config.name, timeout=wm_timeout) as wm:
+        registry = SkillRegistry.from_config(config, wm.ontology, context={"mesh": mesh})
+        entries = await anyio.to_thread.run_sync(registry.load)
+        config.check_skill_names(entries)
+        log_path = Path(config.event_log) if config.event_log else None
+        with EventLog(log_path) as events:
+            core = AgentCore(
+                name=config.name,
+                wm=wm,
+                skills=entries,
+                events=events,
+                simulated=simulated_outcomes(config, force=simulate),
+                preempt_timeout=config.preempt_timeout,
+                registry=registry.conditions,
+            )
+            await serve_agent(
+                mesh, core, config=config, wm=wm, registry=registry, task_status=task_status
+            )

@@ -1,0 +1,79 @@
+"""``locate``: find an object with the robot's sensors and write its pose to the world model.
+
+The sensing skill of SkiROS (used by ``pick`` in its ``pre_sense``): every bound sensor
+(``sensor``, and ``platform`` when given) is asked at once; each one that sees the object
+contributes one observation of its pose (source = the sensor's element id, with the
+detection's confidence), replacing older observations, and ``seenAt`` is stamped. If the
+object is now outside the element that holds it in the world model (it fell, someone moved
+it), its spatial parent becomes the smallest container or surface around where it was seen.
+Not seen by any sensor: the run fails (``execution``) and the world model is left as it was.
+"""
+
+from __future__ import annotations
+
+from wm_store.vocab import Prop
+
+from ..errors import SkillFailure
+from ..protocol import HasPropertyCond, SkillDescription
+from ..skill import Skill, SkillContext
+from .params import OBJECT, PLATFORM, SENSOR
+from .sensing import (
+    containing,
+    detect_all,
+    move_ops,
+    observation_ops,
+    sensors_of,
+    sightings,
+    still_inside,
+)
+from .support import element_id, wm_of
+
+__all__ = ["Locate", "locate_object"]
+
+
+async def locate_object(ctx: SkillContext, param: str = "object") -> None:
+    """Sense the element bound to ``param`` with the run's sensors and record it (see the
+    module doc). Raises SkillFailure when no sensor sees it."""
+    wm = wm_of(ctx)
+    target = wm.get_element(element_id(ctx, param))
+    sensors = sensors_of(ctx, "sensor", "platform")
+    if not sensors:
+        raise SkillFailure(f"{ctx.description.name}: no sensor bound to look for {target.id}")
+    seen = sightings(wm, target, await detect_all(sensors))
+    if not seen:
+        names = ", ".join(source for source, _ in sensors)
+        raise SkillFailure(
+            f"{ctx.description.name}: {target.label or target.id} ({target.id}) is not seen by "
+            f"{names}"
+        )
+    ops = observation_ops(target.id, seen)
+    holder = wm.get_parent(target.id)
+    inside = holder is None or still_inside(wm, holder.id, seen[0].pose)
+    if not inside and (where := containing(wm, seen[0].pose, exclude=[target.id])) is not None:
+        ops += move_ops(wm, target.id, where)
+    await wm.transact(ops)
+    best = seen[0]
+    x, y, z = best.pose.translation
+    await ctx.progress(
+        f"{target.label or target.id} seen by {best.source} at ({x:.3f}, {y:.3f}, {z:.3f}) "
+        f"(confidence {best.confidence:.2f}; {len(seen)} sighting(s))",
+        step="located",
+    )
+
+
+class Locate(Skill):
+    """Find an object and record its pose (sensing skill)."""
+
+    description = SkillDescription(
+        name="locate",
+        skill_type="locate",
+        doc="Find an object with the robot's sensors and write its pose (with source and "
+        "confidence) and seenAt to the world model; fails if no sensor sees it.",
+        parameters=[OBJECT, SENSOR, PLATFORM],
+        post=[HasPropertyCond(param="object", property=Prop.pose)],
+        duration=0.5,
+    )
+    success_probability = 0.95
+
+    async def execute(self, ctx: SkillContext) -> None:
+        await locate_object(ctx)

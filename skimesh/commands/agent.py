@@ -1,0 +1,340 @@
+"""``skimesh agent`` (serve a skill agent) and the skill-layer CLI: ``skimesh agents``,
+``skimesh skills [AGENT]``, ``skimesh run AGENT SKILL key=value...``, ``skimesh reload AGENT``
+and ``skimesh stop AGENT RUN``.
+
+``skimesh run`` starts a skill from a plain command line and streams its progress until the
+result (SkiROS2 #42). Exit codes: 0 the run succeeded, 1 it failed, 2 the agent refused it
+(unknown skill, bad parameters, busy device, false pre-condition), 3 the agent could not be
+reached, disappeared, or no result came within ``--deadline``; 130 interrupted: Ctrl-C (or
+SIGTERM) stops the run on the agent (its ``on_preempt`` runs) before the command exits.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from collections.abc import Awaitable, Callable, Sequence
+from pathlib import Path
+
+import anyio
+import msgspec
+
+from meshlink import MeshlinkError, add_mesh_arguments
+from skill_agent.client import AgentClient, find_skills, list_agents
+from skill_agent.config import AgentConfig, load_config
+from skill_agent.errors import AgentTransportError, SkillError
+from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
+from skill_agent.server import run_agent
+from wm_store import WmClient, WmError, ZenohTransport
+from wm_store.ontology_model import TYPED_KINDS
+from wm_store.protocol import Value
+
+from ..connect import mesh_session
+from ..paths import configs_dir
+from ..runtime import run_service
+
+__all__ = ["add_parser", "parse_params", "scenario_config_path"]
+
+_log = logging.getLogger("skimesh.agent")
+Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
+EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE, EXIT_INTERRUPTED = 1, 2, 3, 130
+
+
+def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
+    """Add ``agent``, ``agents``, ``skills``, ``run``, ``reload`` and ``stop``."""
+    p = sub.add_parser(
+        "agent",
+        help="run a skill agent for one robot or smart device",
+        description="Serve a skill agent: register it in the world model, answer skill "
+        "requests on agents/NAME/rpc, publish run progress. Stops cleanly on Ctrl-C / SIGTERM.",
+        conflict_handler="resolve",  # our --config is the agent config; Zenoh's moves below
+    )
+    add_mesh_arguments(p)
+    p.add_argument("--zenoh-config", dest="zenoh_config", metavar="FILE", help="Zenoh JSON5 file")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--config", dest="agent_config", metavar="FILE", help="agent config (TOML)")
+    where.add_argument("--scenario", help="with --robot: configs/scenarios/S/agents/R.toml")
+    p.add_argument("--robot", help="the robot (agent config) of --scenario")
+    p.add_argument("--simulate", action="store_true", help="simulated-outcome mode (no hardware)")
+    p.add_argument("--timeout", type=float, default=5.0, help="world-model request timeout (s)")
+    p.set_defaults(func=_serve)
+
+    agents = sub.add_parser("agents", help="list skill agents: alive (liveliness) and in the WM")
+    _client_arguments(agents)
+    agents.set_defaults(func=lambda a: _client(a, _agents))
+
+    skills = sub.add_parser("skills", help="list the skills of one agent or of all agents")
+    skills.add_argument("agent", nargs="?", help="only this agent")
+    _client_arguments(skills)
+    skills.set_defaults(func=lambda a: _client(a, _skills))
+
+    run = sub.add_parser(
+        "run",
+        help="run a skill on an agent and stream its progress until the result",
+        description="Start SKILL on AGENT with key=value parameters (element parameters take "
+        'element ids; typed values as JSON, e.g. pose=\'{"position": {"x": 1}}\'). Exit '
+        "codes: 0 succeeded, 1 failed, 2 refused, 3 agent unreachable or lost / deadline.",
+    )
+    run.add_argument("agent")
+    run.add_argument("skill")
+    run.add_argument("params", nargs="*", metavar="KEY=VALUE")
+    run.add_argument("--queue", action="store_true", help="wait for busy devices, not refuse")
+    run.add_argument("--simulate", action="store_true", help="simulated outcome for this run")
+    run.add_argument("--run-timeout", type=float, help="the run's own time limit (s)")
+    run.add_argument("--deadline", type=float, default=600.0, help="give up after (s)")
+    _client_arguments(run)
+    run.set_defaults(func=lambda a: _client(a, _run))
+
+    reload = sub.add_parser(
+        "reload", help="re-import an agent's skill plug-ins (runs in flight keep their code)"
+    )
+    reload.add_argument("agent")
+    _client_arguments(reload)
+    reload.set_defaults(func=lambda a: _client(a, _reload))
+
+    stop = sub.add_parser("stop", help="stop a run (the skill brings its hardware to safety)")
+    stop.add_argument("agent")
+    stop.add_argument("run_id")
+    _client_arguments(stop)
+    stop.set_defaults(func=lambda a: _client(a, _stop))
+
+
+def _client_arguments(p: argparse.ArgumentParser) -> None:
+    add_mesh_arguments(p)
+    p.add_argument("--timeout", type=float, default=5.0, help="request timeout in seconds")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+# --------------------------------------------------------------------------- agent
+
+
+def scenario_config_path(scenario: str, robot: str) -> Path:
+    """``configs/scenarios/<scenario>/agents/<robot>.toml``, or FileNotFoundError listing
+    what exists."""
+    folder = configs_dir() / "scenarios" / scenario / "agents"
+    path = folder / f"{robot}.toml"
+    if not path.is_file():
+        have = sorted(p.stem for p in folder.glob("*.toml")) if folder.is_dir() else []
+        raise FileNotFoundError(f"no agent config {path}; robots of {scenario!r}: {have or 'none'}")
+    return path
+
+
+def _load(args: argparse.Namespace) -> AgentConfig:
+    if args.agent_config:
+        return load_config(args.agent_config)
+    if not args.robot:
+        raise SkillError("--scenario needs --robot")
+    return load_config(scenario_config_path(args.scenario, args.robot))
+
+
+def _serve(args: argparse.Namespace) -> int:
+    try:
+        config = _load(args)
+    except (SkillError, FileNotFoundError) as e:
+        print(f"skimesh agent: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+
+    async def main() -> int:
+        try:
+            async with mesh_session(args) as mesh:
+                await run_agent(mesh, config, simulate=args.simulate, wm_timeout=args.timeout)
+        except SkillError as e:
+            print(f"skimesh agent {config.name}: {e}", file=sys.stderr)
+            return EXIT_REFUSED
+        except (WmError, MeshlinkError) as e:
+            print(f"skimesh agent {config.name}: {e}", file=sys.stderr)
+            return EXIT_UNREACHABLE
+        return 0
+
+    return run_service(main)
+
+
+# --------------------------------------------------------------------------- clients
+
+
+def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Awaitable[int]]) -> int:
+    interrupted: list[bool] = []
+
+    async def main() -> int:
+        try:
+            return await body(args)
+        except anyio.get_cancelled_exc_class():  # SIGINT / SIGTERM: a run in flight is stopped
+            interrupted.append(True)
+            raise
+        except AgentTransportError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_UNREACHABLE
+        except TimeoutError:
+            print(f"error: no result within {args.deadline:g} s (run stopped)", file=sys.stderr)
+            return EXIT_UNREACHABLE
+        except SkillError as e:
+            print(f"refused: {e}", file=sys.stderr)
+            return EXIT_REFUSED
+        except MeshlinkError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_UNREACHABLE
+
+    code = run_service(main)
+    if interrupted:
+        print("interrupted (a run in flight was stopped)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return code
+
+
+def _print_json(obj: object) -> None:
+    sys.stdout.write(msgspec.json.encode(obj).decode() + "\n")
+    sys.stdout.flush()
+
+
+def _table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    widths = [max(len(r[i]) for r in (head, *rows)) for i in range(len(head))]
+    for row in (head, *rows):
+        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
+
+
+async def _agents(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        alive = set(await list_agents(mesh, timeout=args.timeout))
+        registered: dict[str, dict[str, object]] = {}
+        try:
+            async with WmClient.connect(ZenohTransport(mesh), timeout=args.timeout) as wm:
+                for agent in wm.resolve_element(type="Agent"):
+                    robots = [r.object for r in wm.query_relation(agent.id, "controls")]
+                    registered[agent.label] = {
+                        "element": agent.id,
+                        "available": bool(agent.properties.get("available", False)),
+                        "robot": robots[0] if robots else "",
+                        "skills": len(wm.query_relation(agent.id, "hasSkill")),
+                    }
+        except WmError as e:
+            print(f"warning: world model unreachable ({e}); liveliness only", file=sys.stderr)
+    names = sorted(alive | set(registered))
+    rows = [{"agent": n, "alive": n in alive, **registered.get(n, {})} for n in names]
+    if args.json:
+        _print_json(rows)
+    else:
+        head = ("AGENT", "ALIVE", "AVAILABLE", "ROBOT", "SKILLS", "ELEMENT")
+        cells = [
+            [
+                str(r.get(k, "-"))
+                for k in ("agent", "alive", "available", "robot", "skills", "element")
+            ]
+            for r in rows
+        ]
+        _table(head, cells)
+    return 0
+
+
+def _param_text(desc: SkillDescription) -> str:
+    parts = []
+    for p in desc.parameters:
+        text = f"{p.name}:{p.type}"
+        if p.kind != "online":
+            text += f"[{p.kind}]"
+        if p.default is not None:
+            text += f"={json.dumps(msgspec.to_builtins(p.default))}"
+        parts.append(text)
+    return " ".join(parts)
+
+
+async def _skills(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        if args.agent:
+            replies = {
+                args.agent: await AgentClient(mesh, args.agent, timeout=args.timeout).skills_reply()
+            }
+        else:
+            replies = await find_skills(mesh, timeout=args.timeout)
+    if args.json:
+        _print_json({agent: reply.skills for agent, reply in replies.items()})
+        return 0
+    rows = [
+        [agent, d.name, d.family, _param_text(d), (d.doc.strip().splitlines() or [""])[0]]
+        for agent, reply in replies.items()
+        for d in reply.skills
+    ]
+    _table(("AGENT", "SKILL", "TYPE", "PARAMETERS", "DOC"), rows)
+    return 0
+
+
+def parse_params(pairs: Sequence[str], desc: SkillDescription | None) -> dict[str, Value]:
+    """``key=value`` words -> parameter values, converted by the parameter's declared type
+    (numbers, booleans, typed values as JSON; element ids and strings as given)."""
+    kinds = {p.name: p.type for p in desc.parameters} if desc is not None else {}
+    values: dict[str, Value] = {}
+    for pair in pairs:
+        key, sep, raw = pair.partition("=")
+        if not sep or not key:
+            raise SkillError(f"parameters are KEY=VALUE, not {pair!r}")
+        values[key] = _convert(raw, kinds.get(key, "any"), key)
+    return values
+
+
+def _convert(raw: str, kind: str, key: str) -> Value:
+    try:
+        if kind == "float":
+            return float(raw)
+        if kind == "int":
+            return int(raw)
+        if kind == "bool":
+            if raw.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                raise ValueError(raw)
+            return raw.lower() in ("true", "1", "yes")
+        if kind in TYPED_KINDS:
+            return msgspec.json.decode(raw, type=TYPED_KINDS[kind])
+        if kind in ("any", "list", "Size"):
+            decoded: Value = msgspec.json.decode(raw, type=Value)
+            return decoded
+    except (ValueError, msgspec.MsgspecError) as e:
+        if kind in ("any", "list", "Size"):
+            return raw  # not JSON: a plain string (the agent checks the kind)
+        raise SkillError(f"parameter {key}: {raw!r} is not a {kind} ({e})") from None
+    return raw  # str, or an element id
+
+
+def _print_event(event: RunEvent) -> None:
+    if isinstance(event, Progress):
+        done = f" ({event.fraction:.0%})" if event.fraction >= 0 else ""
+        step = f" {event.step}:" if event.step else ""
+        print(f"  [{event.state}]{step} {event.message}{done}".rstrip(), flush=True)
+    else:
+        status = "succeeded" if event.success else f"failed ({event.reason})"
+        print(f"{event.skill} {event.run_id} {status}: {event.message}".rstrip(), flush=True)
+
+
+async def _run(args: argparse.Namespace) -> int:
+    async with (
+        mesh_session(args) as mesh,
+        AgentClient(mesh, args.agent, timeout=args.timeout) as client,
+    ):
+        skills = {d.name: d for d in await client.skills()}
+        params = parse_params(args.params, skills.get(args.skill))
+        result: RunResult = await client.run(
+            args.skill,
+            params,
+            queue=args.queue,
+            simulate=args.simulate,
+            timeout=args.run_timeout,
+            deadline=args.deadline,
+            on_event=_print_json if args.json else _print_event,
+            author="cli",
+        )
+    return 0 if result.success else EXIT_FAILED
+
+
+async def _reload(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        print(await AgentClient(mesh, args.agent, timeout=args.timeout).reload())
+    return 0
+
+
+async def _stop(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        result = await AgentClient(mesh, args.agent, timeout=args.timeout).stop(args.run_id)
+    if args.json:
+        _print_json(result)
+    else:
+        _print_event(result)
+    return 0
