@@ -55,10 +55,16 @@ from meshlink.bridge import call0, undeclare
 from meshlink.testing import free_port
 from skill_agent.client import AgentClient
 from skill_agent.config import load_config
+from skill_agent.protocol import Progress, RunEvent
 from skill_agent.server import run_agent
 from skimesh.runtime import run_service
 from wm_store import Ontology, StoreConfig, WmStore, serve_store
 
+BREAKDOWN = {
+    "request": "start sent -> agent's first event (request delivery, dispatch, start)",
+    "agent": "first event -> result, in the agent (lifecycle, 7 events published)",
+    "result": "result stamped -> result in the client's loop (publication delivery)",
+}
 PAYLOAD = 200  # bytes of the baseline replies (a StartRun / RunStarted pair is ~100-200 bytes)
 AGENT = "noop"
 CALLERS = 8
@@ -181,25 +187,37 @@ async def measured_phases(endpoint: str, mesh_name: str, plan: Plan) -> dict[str
                 samples.append(time.perf_counter_ns() - start)
         out["bridge_rtt_us"] = summarize(samples, 1e-3)
 
-        async def timed_runs(client: AgentClient, count: int) -> Stats:
+        async def timed_runs(client: AgentClient, count: int) -> tuple[Stats, dict[str, Stats]]:
             times: list[int] = []
+            parts: dict[str, list[float]] = {"request": [], "agent": [], "result": []}
             for i in range(plan.warmup + count):
+                seen: list[tuple[RunEvent, float]] = []
+
+                def record(event: RunEvent, out: list[tuple[RunEvent, float]] = seen) -> None:
+                    out.append((event, time.time()))
+
+                sent = time.time()
                 start = time.perf_counter_ns()
-                result = await client.run("noop")
+                result = await client.run("noop", on_event=record)
                 elapsed = time.perf_counter_ns() - start
                 if not result.success:
                     raise RuntimeError(f"noop run failed: {result.message}")
                 if i >= plan.warmup:
                     times.append(elapsed)
-            return summarize(times, 1e-3)
+                    first, last = seen[0][0], seen[-1]
+                    first_stamp = first.stamp if isinstance(first, Progress) else sent
+                    parts["request"].append(first_stamp - sent)
+                    parts["agent"].append(result.finished_at - first_stamp)
+                    parts["result"].append(last[1] - result.finished_at)
+            return summarize(times, 1e-3), {k: summarize(v, 1e6) for k, v in parts.items()}
 
         async with AgentClient(mesh, AGENT) as shared:
-            out["run_us"] = await timed_runs(shared, plan.runs)
+            out["run_us"], out["breakdown_us"] = await timed_runs(shared, plan.runs)
             out["runs_per_s_1"] = await throughput(shared, 1, plan.throughput_seconds)
             out[f"runs_per_s_{CALLERS}"] = await throughput(
                 shared, CALLERS, plan.throughput_seconds
             )
-        out["run_per_run_subscription_us"] = await timed_runs(
+        out["run_per_run_subscription_us"], _ = await timed_runs(
             AgentClient(mesh, AGENT), plan.per_run_subscription_runs
         )
     return out
@@ -319,7 +337,7 @@ def run(plan: Plan, json_path: Path | None) -> int:
             stack.callback(child.stop)
             child.expect("ready", timeout=60)
         print(f"router, store, agent up (mesh {mesh}); measuring...", file=sys.stderr, flush=True)
-        details = {"raw_rtt_us": raw_rtt(endpoint, mesh, plan)}
+        details: dict[str, Any] = {"raw_rtt_us": raw_rtt(endpoint, mesh, plan)}
         details |= anyio.run(measured_phases, endpoint, mesh, plan)
     conditions |= {"load_end": load_average(), "calibration_ms_end": calibrate()}
     rows = make_rows(details)
@@ -334,6 +352,11 @@ def run(plan: Plan, json_path: Path | None) -> int:
         print(
             f"{name}: n={s.count} p50={s.p50:.0f} p90={s.p90:.0f} p99={s.p99:.0f} max={s.max:.0f}"
         )
+    print("where a no-op run's time goes (shared client; wall clocks of both processes, us):")
+    breakdown: dict[str, Stats] = details["breakdown_us"]
+    for part, what in BREAKDOWN.items():
+        b = breakdown[part]
+        print(f"  {what}: p50={b.p50:.0f} p99={b.p99:.0f}")
     if json_path is not None:
         doc = {
             "machine": info,

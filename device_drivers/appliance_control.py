@@ -27,6 +27,7 @@ from device_drivers.interfaces import ApplianceState
 from device_drivers.motion_math import PEAK_SPEED, minjerk
 from device_drivers.protocol import Heat, Press, SetDoor
 from device_drivers.scenario import ApplianceEntry
+from device_drivers.scene_facts import ObjectInfo
 
 __all__ = ["ApplianceController"]
 
@@ -40,7 +41,7 @@ class ApplianceController(Controller):
         entry: ApplianceEntry,
         model: Any,
         data: Any,
-        objects: Mapping[str, int],
+        objects: Mapping[str, ObjectInfo],
     ) -> None:
         super().__init__(key, entry.label)
         self.m, self.d, self.entry = model, data, entry
@@ -146,8 +147,10 @@ class ApplianceController(Controller):
         origin = self.d.xpos[self.body]
         d, w, h, t = a.size[0] / 2, a.size[1] / 2, a.size[2], a.wall
         inside = []
-        for label, body in self.objects.items():
-            x, y, z = rot.T @ (self.d.xpos[body] - origin)
+        for label, obj in self.objects.items():
+            body_rot = self.d.xmat[obj.body].reshape(3, 3)
+            centre = self.d.xpos[obj.body] + body_rot[:, 2] * (obj.half[2] - obj.bottom)
+            x, y, z = rot.T @ (centre - origin)
             if -d + t <= x <= d and abs(y) <= w - t and t <= z <= h - t:
                 inside.append(label)
         return sorted(inside)

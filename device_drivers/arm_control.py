@@ -182,7 +182,10 @@ class ArmController(Controller):
         mujoco.mju_quat2Mat(flat, slerp(plan["quat0"], plan["quat1"], f))
         rot = flat.reshape(3, 3)
         whole = plan["whole_body"]
-        q, pos_err, rot_err = self.tracker.step(plan["q"], pos, rot, whole_body=whole)
+        iterations = 4 if done else 1  # converge exactly on the last point
+        q, pos_err, rot_err = self.tracker.step(
+            plan["q"], pos, rot, whole_body=whole, iterations=iterations
+        )
         if pos_err > _TRACK_POS or rot_err > _TRACK_ROT or np.abs(q - plan["q"]).max() > _JUMP:
             q = self._full_solve(plan["q"], pos, rot, whole)
         plan["q"] = q

@@ -2,7 +2,7 @@
 
 Each element's :class:`~device_drivers.scenario.Placement` is relative to its parent's support
 surface; :func:`resolve_placements` chains them into world poses of each element's bottom
-centre. The world-model engineer can use the same function to write initial poses.
+centre. :func:`object_centres` gives the centres instead (the world model's pose convention).
 
 Support surfaces, in the parent's own frame (origin at its bottom centre, or for a robot on the
 floor under its base centre): furniture top ``(0, 0, top)``; container and appliance inner
@@ -18,7 +18,14 @@ from msgspec import Struct
 from device_drivers.robot_spec import RobotSpec
 from device_drivers.scenario import Scenario
 
-__all__ = ["Footprint", "WorldPlacement", "deck_point", "footprints", "resolve_placements"]
+__all__ = [
+    "Footprint",
+    "WorldPlacement",
+    "deck_point",
+    "footprints",
+    "object_centres",
+    "resolve_placements",
+]
 
 
 class WorldPlacement(Struct, frozen=True):
@@ -120,6 +127,20 @@ def resolve_placements(s: Scenario) -> dict[str, WorldPlacement]:
         # parts are free bodies: they never ride rigidly on a robot, whatever their holder does
         out[p.label] = WorldPlacement(placed.x, placed.y, placed.z, placed.yaw, parent=p.parent)
     return out
+
+
+def object_centres(s: Scenario) -> dict[str, tuple[float, float, float, float]]:
+    """World ``(x, y, z, yaw)`` of the *centre* of every furniture, container, part and
+    appliance at the start: the pose convention of the world model (placements are bottom
+    centres)."""
+    heights = {f.label: f.top for f in s.furniture}
+    heights.update({c.label: c.size[2] for c in s.containers})
+    heights.update({p.label: p.height for p in s.parts})
+    heights.update({a.label: a.size[2] for a in s.appliances})
+    return {
+        label: (p.x, p.y, p.z + heights[label] / 2, p.yaw)
+        for label, p in resolve_placements(s).items()
+    }
 
 
 def footprints(s: Scenario) -> list[Footprint]:

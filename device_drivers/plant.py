@@ -92,7 +92,7 @@ class Plant:
             for ctrl, kind in ((arm, "arm"), (hand, "gripper"), (base, "base")):
                 self._add(ctrl, kind)  # type: ignore[arg-type]
         objects = self.facts.objects
-        movable = {k: v.body for k, v in objects.items() if v.kind != "appliance"}
+        movable = {k: v for k, v in objects.items() if v.kind != "appliance"}
         for a in scenario.appliances:
             self._add(ApplianceController((a.label, "appliance"), a, m, d, movable), "appliance")
         placed = resolve_placements(scenario)
@@ -107,6 +107,11 @@ class Plant:
                     key, s, m, d, objects, seed + 1000 * i, surface, placed[s.surface]
                 )
             self._add(sensor, "sensor")
+        free = [(k, o.free_dof) for k, o in self.facts.objects.items() if o.free_dof >= 0]
+        self._free = (
+            [k for k, _ in free],
+            np.array([[a, a + 1, a + 2] for _, a in free], dtype=int),
+        )
         mujoco.mj_forward(m, d)
         self.snapshot = self._snapshot()
 
@@ -167,11 +172,9 @@ class Plant:
             state = ctrl.state()
             if state is not None:
                 states[key] = state
-        speeds = {
-            label: float(np.linalg.norm(d.qvel[obj.free_dof : obj.free_dof + 3]))
-            for label, obj in self.facts.objects.items()
-            if obj.free_dof >= 0
-        }
+        labels, dofs = self._free
+        speed = np.linalg.norm(d.qvel[dofs], axis=1) if len(labels) else np.zeros(0)
+        speeds = dict(zip(labels, speed.tolist(), strict=True))
         attached = frozenset(
             ctrl.grasp.attached
             for ctrl in self.controllers.values()

@@ -83,17 +83,29 @@ class RemoteDevice:
             return await self._send(p.Request(command=command), timeout)
         key = self._mesh.keys.device_state(*self.key).removesuffix("state")
         key += f"progress/{uuid.uuid4().hex[:16]}"
+        last = -1.0
+
+        def report(payload: bytes) -> None:
+            nonlocal last
+            last = msgspec.msgpack.decode(payload, type=p.Progress).fraction
+            progress(last)
+
         async with self._mesh.subscribe(key) as updates, anyio.create_task_group() as tg:
 
             async def forward() -> None:
                 async for sample in updates:
-                    progress(msgspec.msgpack.decode(sample.payload, type=p.Progress).fraction)
+                    report(sample.payload)
 
             tg.start_soon(forward)
             try:
                 reply = await self._send(p.Request(command=command, progress_key=key), timeout)
             finally:
                 tg.cancel_scope.cancel()
+            with contextlib.suppress(anyio.WouldBlock, anyio.EndOfStream):
+                while True:  # what arrived with the reply
+                    report(updates.receive_nowait().payload)
+        if last < 1.0:  # the reply can overtake the last progress sample (other Zenoh path)
+            progress(1.0)
         return reply
 
     async def _send(self, request: p.Request, timeout: float) -> p.Reply:

@@ -215,7 +215,10 @@ def _appliance(world: mujoco.MjSpec, a: ApplianceEntry, p: WorldPlacement) -> No
         armature=0.01,
     )
     dt = 0.012
-    _box(door, f"{a.label}/door", [dt, w, h / 2], [dt, -side * w, h / 2], rgba=rgba, mass=1.0)
+    half_h = h / 2 - 0.003  # clear of the surface the microwave stands on
+    _box(door, f"{a.label}/door", [dt, w, half_h], [dt, -side * w, h / 2], rgba=rgba, mass=1.0)
+    # the housing is a static body, so MuJoCo's parent-child contact filter does not apply
+    world.add_exclude(bodyname1=a.label, bodyname2=f"{a.label}/door")
     _box(
         door,
         f"{a.label}/window",

@@ -4,9 +4,11 @@ Both answer ``Detect`` at once with ground truth made imperfect:
 
 - **Camera**: objects (parts, containers, appliances) whose centre is in front of the camera,
   within ``range`` and inside the field of view (vertical ``fov``, horizontal for a 4:3
-  image), and, with ``occlusion``, not hidden (a ray from the camera to the centre first hits
-  that object). Position noise: Gaussian, ``noise_std`` per axis at 1 m, growing with depth;
-  orientation: true. Confidence falls with depth and towards the image border.
+  image), and, with ``occlusion``, parts that are not hidden (a ray from the camera to the
+  part's centre first hits that part; boxes and appliances are large and always seen).
+  Position noise: Gaussian, ``noise_std`` per axis at 1 m, growing with depth; orientation:
+  true. Poses are object *centres* (the world model's convention), not body origins.
+  Confidence falls with depth and towards the image border.
 - **Smart platform** (FRIEND II's tactile tray): free objects standing on the platform top
   (their bottom within 1 cm of it, their centre over it), reported at the centre of their
   footprint on the surface, with ``noise_std`` Gaussian noise in x and y.
@@ -88,7 +90,8 @@ class CameraController(_Sensor):
         found = []
         geom = np.zeros(1, dtype=np.int32)
         for obj in self.objects.values():
-            centre = d.xpos[obj.body]
+            body_rot = d.xmat[obj.body].reshape(3, 3)
+            centre = d.xpos[obj.body] + body_rot[:, 2] * (obj.half[2] - obj.bottom)
             x, y, z = rot.T @ (centre - origin)
             depth = -z  # a camera looks along its -z
             if not 0.05 < depth <= e.range:
@@ -96,7 +99,7 @@ class CameraController(_Sensor):
             off_h, off_v = abs(x) / (depth * self.tan_h), abs(y) / (depth * self.tan_v)
             if max(off_h, off_v) > 1.0:
                 continue
-            if e.occlusion:
+            if e.occlusion and obj.kind == "part":  # boxes are large: a part in one hides it not
                 ray = centre - origin
                 hit = mujoco.mj_ray(self.m, d, origin, ray, _RAY_GROUPS, 1, self.own_body, geom)
                 if geom[0] >= 0 and int(self.m.geom_bodyid[geom[0]]) != obj.body and hit < 0.98:
@@ -109,7 +112,7 @@ class CameraController(_Sensor):
                     name=obj.label,
                     type=obj.type,
                     pose=pose_of(noisy, d.xquat[obj.body]),
-                    confidence=round(min(max(confidence, 0.05), 1.0), 3),
+                    confidence=round(float(min(max(confidence, 0.05), 1.0)), 3),
                     source=self.label,
                 )
             )

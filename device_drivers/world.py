@@ -69,7 +69,9 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     """As fast as possible instead of real time."""
     control_rate: Annotated[float, Meta(ge=10, le=500)] = 100.0
     batch: Annotated[float, Meta(gt=0, le=1)] = 0.05
-    """Largest simulated time per batch, s (real time runs what is due, up to this)."""
+    """Largest simulated time per batch in real time, s (it runs what is due, up to this)."""
+    fast_batch: Annotated[float, Meta(gt=0, le=1)] = 0.1
+    """Simulated time per batch in fast mode, s: longer batches, fewer thread hand-offs."""
     slip: Annotated[float, Meta(gt=0)] = 0.25
     grasp: GraspMode = "weld"
     seed: int = 0
@@ -97,8 +99,8 @@ class SimWorld:
         options: WorldOptions | None = None,
         recorder: Recorder | None = None,
     ) -> None:
-        """Blocking (~0.1-0.5 s: builds and compiles the model, IK solvers): call it through
-        :meth:`create` from async code."""
+        """Blocking (~0.1-0.5 s: builds and compiles the model and the IK solvers): call it
+        through :meth:`create` from async code."""
         self.options = options or WorldOptions()
         self.scenario = scenario
         o = self.options
@@ -121,6 +123,7 @@ class SimWorld:
         self._alarms: list[tuple[float, anyio.Event]] = []
         self._ik: dict[str, tuple[PlacoIK, DlsIK]] = {}
         self._ik_limiters = {r.name: anyio.CapacityLimiter(1) for r in scenario.robots}
+        self._build_ik()
         self._stats = {"batches": 0, "ticks": 0, "slips": 0, "busy": 0.0, "wall0": 0.0}
         if recorder is not None:  # still in the constructing thread: nothing steps yet
             cameras = [
@@ -147,7 +150,7 @@ class SimWorld:
         """Step until cancelled or failed (see module doc). Returns after a failure, with every
         waiting command failed; never raises it (read :attr:`failure`)."""
         o, plant = self.options, self.plant
-        max_ticks = max(1, round(o.batch / plant.tick_time))
+        max_ticks = max(1, round((o.fast_batch if o.fast else o.batch) / plant.tick_time))
         wall0, sim0 = time.perf_counter(), plant.time
         self._stats["wall0"] = wall0
         task_status.started()
@@ -315,15 +318,21 @@ class SimWorld:
         values = self._snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
         return {j: float(v) for j, v in zip(ctrl.joints, values, strict=True)}
 
-    def _solve(self, robot: str, q0: dict[str, float], goal: TcpTarget, whole: bool) -> IKResult:
-        if robot not in self._ik:
-            from device_drivers.ik import IKOptions
-            from device_drivers.ik_dls import DlsIK
-            from device_drivers.ik_placo import PlacoIK
+    def _build_ik(self) -> None:
+        """One placo and one DLS solver per robot, built with the world (~20-50 ms each):
+        built lazily, the first tool move of a fast world lost seconds of simulated time."""
+        from device_drivers.ik import IKOptions
+        from device_drivers.ik_dls import DlsIK
+        from device_drivers.ik_placo import PlacoIK
 
-            spec = self.scenario.robot(robot).spec
-            opts = IKOptions(position_tolerance=2e-4, orientation_tolerance=2e-3)
-            self._ik[robot] = (PlacoIK.for_robot(spec, opts), DlsIK.for_robot(spec, opts))
+        # 12 restarts, not 24: an unreachable target then costs ~50 ms of GIL-bound Python
+        # per solver instead of ~0.1 s, which the event loop feels
+        opts = IKOptions(position_tolerance=2e-4, orientation_tolerance=2e-3, restarts=12)
+        for robot in self.scenario.robots:
+            spec = robot.spec
+            self._ik[robot.name] = (PlacoIK.for_robot(spec, opts), DlsIK.for_robot(spec, opts))
+
+    def _solve(self, robot: str, q0: dict[str, float], goal: TcpTarget, whole: bool) -> IKResult:
         placo, dls = self._ik[robot]
         try:
             return placo.solve(q0, goal, whole_body=whole)

@@ -332,6 +332,38 @@ async def sync_with_router(session: zenoh.Session, port: LoopPort) -> None:
     )
 
 
+async def alive_tokens(session: zenoh.Session, key_expr: str, port: LoopPort) -> list[str]:
+    """Keys of the liveliness tokens matching ``key_expr`` alive now, sorted.
+
+    A liveliness *get* from a client sometimes answers nothing although the tokens are alive
+    (3 of 60 runs here, with callback handlers). A liveliness *subscriber with history* always
+    receives them: the router sends the current tokens when it processes the declaration, on
+    the same ordered link as the later probe reply. The subscriber's callback runs on Zenoh's
+    receive thread (``indirect=False``, a set insertion), like the probe's reply, so when the
+    probe round trip is over every history sample has been recorded.
+    """
+    keys: set[str] = set()
+
+    def on_sample(sample: zenoh.Sample) -> None:  # Zenoh thread, GIL held: keep it tiny
+        if sample.kind == zenoh.SampleKind.PUT:
+            keys.add(str(sample.key_expr))
+        else:
+            keys.discard(str(sample.key_expr))
+
+    subscriber = session.liveliness().declare_subscriber(
+        key_expr, zenoh.handlers.Callback(on_sample, _nothing, indirect=False), history=True
+    )
+    try:
+        await sync_with_router(session, port)
+    finally:
+        undeclare(subscriber)
+    return sorted(keys)
+
+
+def _nothing() -> None:
+    pass
+
+
 def undeclare(entity: Undeclarable) -> None:
     """Undeclare ``entity``; a no-op once the session is closed."""
     with contextlib.suppress(zenoh.ZError):

@@ -94,6 +94,21 @@ class Mesh:
         """
         return [self._reply(r, key_expr) for r in await self._query(key_expr, payload, timeout)]
 
+    async def alive(self, key_expr: str, *, timeout: float = 2.0) -> list[str]:
+        """Keys of the liveliness tokens matching ``key_expr`` that are alive now, sorted (see
+        :func:`meshlink.bridge.alive_tokens` for why this is not a liveliness get).
+
+        Raises:
+            InvalidKeyError: Zenoh refuses the key expression. SessionError: the session is
+            closed. ValueError: ``timeout`` is not positive. TimeoutError: no answer in time.
+        """
+        _check_timeout(timeout)
+        try:
+            with anyio.fail_after(timeout):
+                return await bridge.alive_tokens(self._session, key_expr, self._port)
+        except zenoh.ZError as e:
+            raise self._zenoh_error(key_expr, e) from None
+
     async def request(
         self,
         key_expr: str,

@@ -33,11 +33,9 @@ from typing import Self, TypeVar
 
 import anyio
 import msgspec
-import zenoh
 from anyio.streams.memory import MemoryObjectReceiveStream, MemoryObjectSendStream
 
 from meshlink import Liveness, Mesh, MeshlinkError, NoReplyError, RemoteError, Sample
-from meshlink.bridge import LoopPort, call0
 from meshlink.subscription import Subscription
 from wm_store.protocol import Value
 
@@ -138,14 +136,16 @@ class RunFeed:
 
     async def _pump_events(self, samples: Subscription[Sample]) -> None:
         async for sample in samples:
+            # ``.../runs/<run>/progress``: other clients' runs are skipped undecoded.
+            inbox = self._inboxes.get(sample.key.rsplit("/", 2)[-2])
+            if inbox is None:
+                continue
             try:
                 event = decode_event(sample.payload)
             except msgspec.MsgspecError as e:
                 _log.warning("undecodable progress event on %s: %s", sample.key, e)
                 continue
-            inbox = self._inboxes.get(event.run_id)
-            if inbox is not None:
-                inbox.send_nowait(event)
+            inbox.send_nowait(event)
 
     async def _pump_presence(self, presence: Subscription[Liveness]) -> None:
         async for change in presence:
@@ -154,36 +154,8 @@ class RunFeed:
 
 
 async def liveliness_get(mesh: Mesh, key_expr: str, *, timeout: float) -> list[str]:
-    """Keys of the liveliness tokens alive now that match ``key_expr`` (a Zenoh liveliness
-    query; the bridge pattern of :func:`meshlink.bridge.run_query`: a tiny reply callback, the
-    loop woken by the drop callback, the query cancelled if we stop waiting). To move into
-    meshlink as ``Mesh.liveliness_get`` (meshlink has no liveliness query yet)."""
-    port = LoopPort()
-    keys: list[str] = []
-    done = anyio.Event()
-
-    def on_reply(reply: zenoh.Reply) -> None:  # Zenoh thread, GIL held: keep it tiny
-        sample = reply.ok
-        if sample is not None:
-            keys.append(str(sample.key_expr))
-
-    def on_drop() -> None:
-        port.call_soon(done.set)
-
-    token = zenoh.CancellationToken()
-    mesh.session.liveliness().get(
-        key_expr,
-        zenoh.handlers.Callback(on_reply, on_drop, indirect=False),
-        timeout=timeout,
-        cancellation_token=token,
-    )
-    try:
-        with anyio.move_on_after(timeout + 1.0):
-            await done.wait()
-    finally:
-        if not done.is_set():
-            call0(token.cancel)  # returns once the drop callback ran: no callback after this
-    return list(keys)
+    """Keys of the liveliness tokens alive now that match ``key_expr``."""
+    return await mesh.alive(key_expr, timeout=timeout)
 
 
 class AgentClient:

@@ -16,6 +16,8 @@ Hierarchy::
     ├── UnknownRunError            no run with that id
     ├── RunStateError              the run cannot do that now (e.g. resume a run not paused)
     ├── SkillFailure               raised by skill code: the skill could not do its job
+    ├── BadRequestError            bytes that are no valid request (garbage, unknown tag, types)
+    ├── AgentInternalError         the agent failed unexpectedly while answering (a bug; logged)
     ├── AgentTransportError        the agent cannot be reached
     └── RemoteSkillError           the agent answered with an error (keeps its code)
 
@@ -25,7 +27,9 @@ Each class has a stable ``code`` used on the wire (:class:`skill_agent.protocol.
 from __future__ import annotations
 
 __all__ = [
+    "AgentInternalError",
     "AgentTransportError",
+    "BadRequestError",
     "InferenceError",
     "ParameterError",
     "ParameterTypeError",
@@ -99,6 +103,14 @@ class SkillFailure(SkillError):
     code = "skill_failure"
 
 
+class BadRequestError(SkillError):
+    code = "bad_request"
+
+
+class AgentInternalError(SkillError):
+    code = "internal"
+
+
 class AgentTransportError(SkillError):
     code = "agent_transport"
 
@@ -128,6 +140,8 @@ _BY_CODE: dict[str, type[SkillError]] = {
         UnknownRunError,
         RunStateError,
         SkillFailure,
+        BadRequestError,
+        AgentInternalError,
         AgentTransportError,
     )
 }

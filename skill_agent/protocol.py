@@ -7,7 +7,7 @@ Key space (prefix ``skimesh/<mesh>``):
 
 - ``agents/<agent>``                       liveliness token
 - ``agents/<agent>/skills``                queryable: :class:`SkillsReply`
-- ``agents/<agent>/rpc``                   queryable: an :data:`AgentRequest` -> an :data:`AgentReply`
+- ``agents/<agent>/rpc``                   queryable: :data:`AgentRequest` -> :data:`AgentReply`
 - ``agents/<agent>/runs/<run>/progress``   publication: :data:`RunEvent` (progress, then one result)
 
 Unions are tagged (``request``, ``reply``, ``cond``, ``event``); messages only gain fields with

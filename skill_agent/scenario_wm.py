@@ -17,6 +17,10 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   location's pose is where a robot parks to work there (a station: facing its yaw; a home:
   the robot's start pose). Containers a robot carries get world poses too: the ``navigate``
   skill moves its robot's descendants with it.
+- **Prior knowledge**: each arm's home posture (``jointPositions``, :data:`HOME_6`);
+  appliance doors get a pose and size (for an arm that swings them);
+  closed containers (a meal box) a ``graspPose`` from the side facing the robot in the
+  scenario layout (their -x face), so they can go into an appliance's cavity.
 - **Sizes**: furniture and containers ``SizeCuboid`` (outside extents), parts by shape;
   **masses**; appliances ``doorOpen = false``, ``heating = false``, ``heatingPower``.
 - **at** (symbolic locations for the planner): every furniture, appliance and open container
@@ -39,7 +43,13 @@ import math
 from collections.abc import Mapping
 
 from device_drivers.placement import WorldPlacement, resolve_placements
-from device_drivers.scenario import ContainerEntry, PartEntry, RobotEntry, Scenario
+from device_drivers.scenario import (
+    ApplianceEntry,
+    ContainerEntry,
+    PartEntry,
+    RobotEntry,
+    Scenario,
+)
 from wm_store.protocol import (
     AddElement,
     Op,
@@ -54,13 +64,45 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
+from wm_store.reasoners.spatial import Transform
 from wm_store.vocab import Cls, Prop, Rel
 
-__all__ = ["REACH_FRACTION", "device_label", "door_label", "home_label", "scenario_ops"]
+from .primitives.poses import quat_from_axes, quat_from_yaw, to_wm_pose
+
+__all__ = [
+    "DOOR_HALF_THICKNESS",
+    "HOME_6",
+    "HOME_7",
+    "REACH_FRACTION",
+    "SIDE_GRASP_BELOW_TOP",
+    "SIDE_GRASP_INSET",
+    "SIDE_GRASP_MAX_WIDTH",
+    "device_label",
+    "door_label",
+    "home_label",
+    "scenario_ops",
+]
 
 REACH_FRACTION = 0.8
 """A robot's arm reaches what lies within this fraction of its shoulder-to-tcp length
 (horizontally, from the arm mount) — the test that puts things ``at`` a robot's home."""
+HOME_6: tuple[float, ...] = (0.0, -0.7, 1.7, 0.0, 2.1, 0.0)
+"""Home posture of a 6-joint arm, rad, in joint order (``ARM_JOINTS_6``): the gripper points
+down just in front of the arm's mount, ~0.6 m above the deck (the default robot: tcp 0.2 m
+ahead of the base centre, 0.93 m high), clear of a table or shelf at a station. Written as the
+arm's ``jointPositions``: skills pass through it between a pick in front and a place behind."""
+HOME_7: tuple[float, ...] = (0.0, -0.7, 0.0, 1.7, 0.0, 2.1, 0.0)
+"""The same for a 7-joint arm (``ARM_JOINTS_7``: an upper-arm roll after the shoulder)."""
+DOOR_HALF_THICKNESS = 0.012
+"""Half the thickness of an appliance door panel, m (as ``device_drivers.scene_model`` builds
+it)."""
+SIDE_GRASP_INSET = 0.035
+"""Closed boxes (things carried whole, e.g. into a microwave) get a side grasp as prior
+knowledge: the pads this far in from the face the robot approaches, m."""
+SIDE_GRASP_BELOW_TOP = 0.015
+"""... and this far below the box's top, m."""
+SIDE_GRASP_MAX_WIDTH = 0.077
+"""... if the box is at most this wide across the fingers (the default gripper opens 85 mm)."""
 
 
 def device_label(robot: str, device: str) -> str:
@@ -80,6 +122,28 @@ def door_label(appliance: str) -> str:
 def _pose(x: float, y: float, z: float, yaw: float = 0.0) -> Pose:
     s, c = math.sin(yaw / 2), math.cos(yaw / 2)
     return Pose(Position(x, y, z), Orientation(0.0, 0.0, s, c))
+
+
+def _door(a: ApplianceEntry, p: WorldPlacement) -> dict[str, Value]:
+    """Pose (centre of the closed panel; x out of the front, y from the hinge to the free
+    edge) and size (thickness, width, height) of an appliance's door."""
+    d, h = a.size[0] / 2, a.size[2]
+    flip = (1.0, 0.0, 0.0, 0.0) if a.hinge == "right" else (0.0, 0.0, 0.0, 1.0)
+    body = Transform((p.x, p.y, p.z), quat_from_yaw(p.yaw))
+    centre = body.compose(Transform((d + DOOR_HALF_THICKNESS, 0.0, h / 2), flip))
+    size = SizeCuboid(x=2 * DOOR_HALF_THICKNESS, y=a.size[1], z=h)
+    return {Prop.pose: to_wm_pose(centre), Prop.size: size}
+
+
+def _side_grasp(depth: float, height: float) -> Pose:
+    """The tcp relative to a box: approaching along the box's +x from its -x face, fingers
+    closing across its y, the pads ``SIDE_GRASP_INSET`` m in from the face and
+    ``SIDE_GRASP_BELOW_TOP`` m below its top (so the hand, 6 cm tall, clears the surface the
+    box stands on)."""
+    inset = min(SIDE_GRASP_INSET, depth / 2)
+    up = max(0.0, height / 2 - SIDE_GRASP_BELOW_TOP)
+    q = quat_from_axes((0.0, 0.0, -1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0))
+    return Pose(Position(-depth / 2 + inset, 0.0, up), Orientation(*q))
 
 
 def _part_size(p: PartEntry) -> Value:
@@ -154,7 +218,10 @@ class _Builder:
             self.add(Cls.Location, home_label(r.name), {Prop.pose: pose})
             self.add(r.type, r.name, {Prop.pose: pose})
             for device, cls in _DEVICES:
-                self.add(cls, device_label(r.name, device), {}, r.name, Rel.hasA)
+                props: dict[str, Value] = {}
+                if cls == Cls.Arm:
+                    props[Prop.jointPositions] = list(HOME_6 if r.model.arm_dof == 6 else HOME_7)
+                self.add(cls, device_label(r.name, device), props, r.name, Rel.hasA)
             self.relate(r.name, Rel.at, home_label(r.name))
 
     def furniture_elements(self) -> None:
@@ -178,6 +245,8 @@ class _Builder:
             Prop.size: SizeCuboid(x=c.size[0], y=c.size[1], z=c.size[2]),
             Prop.mass: c.mass,
         }
+        if c.closed and c.size[1] <= SIDE_GRASP_MAX_WIDTH:
+            props[Prop.graspPose] = _side_grasp(c.size[0], c.size[2])
         self.add(c.type, c.label, props, c.parent)
 
     def appliances(self) -> None:
@@ -192,7 +261,7 @@ class _Builder:
             }
             self.add(a.type, a.label, props, a.parent)
             door = Cls.MicrowaveDoor if a.type == Cls.Microwave else Cls.Door
-            self.add(door, door_label(a.label), {}, a.label, Rel.hasA)
+            self.add(door, door_label(a.label), _door(a, p), a.label, Rel.hasA)
 
     def parts(self) -> None:
         for part in self.s.parts:

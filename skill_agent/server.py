@@ -10,7 +10,8 @@ no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
   field types answer ``bad_request``; an unexpected exception answers ``internal``: no request
   crashes the agent or changes state;
 - ``agents/<a>/runs/<run>/progress``  publication (BLOCK): every :data:`RunEvent` of the run,
-  ending with its :class:`RunResult`;
+  in order, ending with its :class:`RunResult`; progress events may wait up to 2 ms to go out
+  in a burst, a result goes at once (:class:`RunEventPublisher`);
 - ``agents/<a>``  liveliness token, declared once the queryables are up, so whoever sees the
   agent alive can call it.
 
@@ -38,7 +39,13 @@ from wm_store.ontology import Ontology, core_ontology_path
 
 from .config import AgentConfig
 from .core import AgentCore
-from .errors import RunStateError, SkillError, UnknownRunError
+from .errors import (
+    AgentInternalError,
+    BadRequestError,
+    RunStateError,
+    SkillError,
+    UnknownRunError,
+)
 from .events import EventLog
 from .plugins import SkillRegistry
 from .protocol import (
@@ -53,6 +60,7 @@ from .protocol import (
     ResumeRun,
     RunEvent,
     RunInfo,
+    RunResult,
     RunsReply,
     RunStatus,
     SkillDescription,
@@ -66,6 +74,7 @@ from .simulated import SimulatedOutcomes
 
 __all__ = [
     "AgentService",
+    "RunEventPublisher",
     "agent_registration",
     "run_agent",
     "serve_agent",
@@ -103,16 +112,16 @@ class AgentService:
         try:
             request = decode_request(data)
         except msgspec.MsgspecError as e:
-            return _error("bad_request", f"undecodable request: {e}")
+            return _error(BadRequestError.code, f"undecodable request: {e}")
         try:
             return encode(await self.handle(request)), True
         except SkillError as e:
             return _error(e.code, str(e))
         except ValueError as e:  # e.g. a run id that is no valid key segment
-            return _error("bad_request", str(e))
+            return _error(BadRequestError.code, str(e))
         except Exception as e:
             _log.exception("request %s failed", type(request).__name__)
-            return _error("internal", f"{type(e).__name__}: {e}")
+            return _error(AgentInternalError.code, f"{type(e).__name__}: {e}")
 
     async def handle(self, request: AgentRequest) -> AgentReply:
         """Answer one request; refusals raise the :mod:`skill_agent.errors` class."""
@@ -157,6 +166,54 @@ class AgentService:
         names = ", ".join(sorted(entries)) or "none"
         _log.warning("agent %s reloaded %d skills: %s", self.core.name, len(entries), names)
         return OkReply(message=f"reloaded {len(entries)} skills: {names}")
+
+
+class RunEventPublisher:
+    """Publishes run events on ``agents/<a>/runs/<run>/progress``, in order, in bursts.
+
+    A Zenoh put after the session was idle for a moment costs 100-200 us here (the wake-up of
+    Zenoh's send path); puts back to back cost ~10 us each. So progress events wait (at most
+    ``max_delay`` seconds) and go out together, and a :class:`RunResult` sends everything
+    pending at once, itself last: a short run's seven events cost about one put, and no result
+    is ever delayed. Measured: a no-op run from another process ~35% faster than with one put
+    per event as it happens (``docs/benchmarks.md``, Skills)."""
+
+    def __init__(self, mesh: Mesh, agent: str, *, max_delay: float = 0.002) -> None:
+        self.mesh = mesh
+        self.agent = agent
+        self.max_delay = max_delay
+        self._pending: list[tuple[str, bytes]] = []
+        self._wake = anyio.Event()
+
+    def publish(self, event: RunEvent) -> None:
+        """Queue ``event`` (from the core's subscriber callback, on the loop)."""
+        try:
+            key = self.mesh.keys.run_progress(self.agent, event.run_id)
+        except ValueError as e:
+            _log.warning("cannot publish run %r: %s", event.run_id, e)
+            return
+        self._pending.append((key, encode(event)))
+        if isinstance(event, RunResult):
+            self.flush()
+        else:
+            self._wake.set()
+
+    def flush(self) -> None:
+        """Put every pending event now, in order (short synchronous Zenoh calls)."""
+        batch, self._pending = self._pending, []
+        for key, payload in batch:
+            try:
+                self.mesh.put(key, payload)
+            except MeshlinkError as e:
+                _log.warning("could not publish on %s: %s", key, e)
+
+    async def run(self) -> None:
+        """Flush progress events ``max_delay`` seconds after the first of a burst."""
+        while True:
+            await self._wake.wait()
+            self._wake = anyio.Event()
+            await anyio.sleep(self.max_delay)
+            self.flush()
 
 
 def _error(code: str, message: str) -> tuple[bytes, bool]:
@@ -223,18 +280,12 @@ async def serve_agent(
     async def skills(_query: IncomingQuery) -> list[Answer]:
         return [Answer(key=keys.agent_skills(name), payload=encode(service.skills_reply()))]
 
-    def publish(event: RunEvent) -> None:  # on the loop; a put is a short call (BLOCK)
-        try:
-            mesh.put(keys.run_progress(name, event.run_id), encode(event))
-        except (MeshlinkError, ValueError) as e:
-            _log.warning(
-                "could not publish %s of run %s: %s", type(event).__name__, event.run_id, e
-            )
-
-    unsubscribe = core.subscribe(publish)
+    publisher = RunEventPublisher(mesh, name)
+    unsubscribe = core.subscribe(publisher.publish)
     token = None
     try:
         async with anyio.create_task_group() as tg:
+            tg.start_soon(publisher.run)
             await tg.start(core.run)
             await tg.start(mesh.serve, keys.agent_skills(name), skills)
             await tg.start(mesh.serve, keys.agent_rpc(name), rpc)
@@ -251,6 +302,7 @@ async def serve_agent(
             task_status.started()
     finally:
         unsubscribe()
+        publisher.flush()  # progress of runs preempted at shutdown (their results went at once)
         with anyio.CancelScope(shield=True):
             if token is not None:
                 with anyio.move_on_after(unregister_timeout):

@@ -246,6 +246,8 @@ def _draft(
             continue
         if spec.kind == "hardware":
             mine = [h for h in agent.hardware if _is(view, h, spec.type)]
+            if not mine and spec.optional and spec.name not in used:
+                continue
             if not mine:
                 return (
                     f"agent '{agent.name}' has no {spec.type} for hardware parameter '{spec.name}'"

@@ -16,7 +16,7 @@ the skill descriptions); the makespan is the latest finish.
 
 Allocation (``balance=True``): the planner picks an agent for each step, not a balanced one.
 Greedy list scheduling then revisits the steps in start order and moves a step to another
-agent offering the same skill family when the step is interchangeable there (the same skill
+agent offering the same skill when the step is interchangeable there (the same skill
 parameters, re-bound to that agent's hardware, and the whole plan still replays from the
 world model's state to the goal) and the makespan shrinks; it repeats until no move helps.
 """
@@ -31,9 +31,9 @@ import msgspec
 
 from .domain import PlanningTask
 from .planner import Plan, PlanStep
-from .reachability import State, StepEffects, apply, replay
+from .reachability import State, StepEffects, apply, replay, unmet, unmet_goals
 
-__all__ = ["Edge", "PartialOrderPlan", "ScheduledStep", "partial_order"]
+__all__ = ["Edge", "PartialOrderPlan", "ScheduledStep", "to_partial_order"]
 
 EdgeReason = Literal["causal", "threat", "conflict", "resource"]
 Key = tuple[str, ...] | tuple[str, int, str]
@@ -217,11 +217,10 @@ def _schedule(
 
 
 def _alternatives(task: PlanningTask, step: PlanStep) -> list[PlanStep]:
-    """The step re-bound to each other agent offering the same skill family."""
-    family = task.actions[step.action].family
+    """The step re-bound to each other agent offering the same skill."""
     out = []
     for schema in task.actions.values():
-        if schema.family != family or schema.agent == step.agent:
+        if schema.skill != step.skill or schema.agent == step.agent:
             continue
         args = tuple(step.params.get(name, "") for name, _ in schema.params)
         if "" in args or any(a not in task.objects for a in args):
@@ -252,22 +251,37 @@ def _states(task: PlanningTask, steps: Sequence[PlanStep]) -> list[State]:
     return out
 
 
+def _valid_from(task: PlanningTask, state: State, steps: Sequence[PlanStep]) -> bool:
+    """Whether ``steps`` run from ``state`` (changed in place) and reach the goal."""
+    for s in steps:
+        failed, _ = apply(task, s.ground, state)
+        if failed:
+            return False
+    return not unmet_goals(task, state)
+
+
 def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialOrderPlan:
     best = _schedule(task, steps)
     moves: list[str] = []
     for _ in range(rounds):
-        states = _states(task, steps)
+        load: dict[str, float] = {}
+        for s in steps:
+            load[s.agent] = load.get(s.agent, 0.0) + s.duration
+        states: list[State] | None = None
         order = sorted(range(len(steps)), key=lambda i: (best.steps[i].start, i))
         moved = False
         for k in order:
             candidates = []
             for alt in _alternatives(task, steps[k]):
-                failed, _ = apply(task, alt.ground, states[k].copy())
-                if failed:
+                # the other agent's work alone would last at least this long
+                if load.get(alt.agent, 0.0) + alt.duration >= best.makespan - 1e-9:
+                    continue
+                states = states or _states(task, steps)
+                if unmet(task, alt.ground, states[k]):
+                    continue
+                if not _valid_from(task, states[k].copy(), [alt, *steps[k + 1 :]]):
                     continue
                 trial = [*steps[:k], alt, *steps[k + 1 :]]
-                if replay(task, [s.ground for s in trial])[1]:
-                    continue
                 schedule = _schedule(task, trial)
                 if schedule.makespan < best.makespan - 1e-9:
                     candidates.append((schedule.makespan, alt.agent, trial, schedule))
@@ -281,7 +295,7 @@ def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialO
     return _schedule(task, steps, moves)
 
 
-def partial_order(plan: Plan, *, balance: bool = True, rounds: int = 64) -> PartialOrderPlan:
+def to_partial_order(plan: Plan, *, balance: bool = True, rounds: int = 64) -> PartialOrderPlan:
     """The plan's partial order and schedule (see the module doc). ``rounds`` bounds the
     number of re-assignments balancing makes."""
     steps = list(plan.steps)

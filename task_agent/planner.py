@@ -301,7 +301,6 @@ FD_SEARCH = (
 )
 
 
-
 class _FastDownward(FastDownwardPDDLPlanner):  # type: ignore[misc]  # untyped
     """Fast Downward, keeping hold of its child process: on a time-out unified-planning 1.3
     kills the process group but neither waits for it nor closes its pipes (a zombie and two
@@ -414,15 +413,15 @@ class Planner:
                 solved = task.restrict(keep)
         attempt = self._attempt(solved, self.timeout)
         fallback = False
-        if solved is not task and attempt.status not in (Status.TIMEOUT,):
-            ok = (
-                attempt.status in _SOLVED and not replay(task, [s.ground for s in attempt.steps])[1]
-            )
-            if not ok:
-                fallback, solved = True, task
-                attempt = self._attempt(task, deadline - time.perf_counter())
+        problem = "not solved"
+        if attempt.status in _SOLVED:
+            _, problem = replay(task, [s.ground for s in attempt.steps])
+        if solved is not task and problem and attempt.status != Status.TIMEOUT:
+            fallback, solved = True, task
+            attempt = self._attempt(task, deadline - time.perf_counter())
+            if attempt.status in _SOLVED:
+                _, problem = replay(task, [s.ground for s in attempt.steps])
         self._raise_for(attempt, task)
-        _, problem = replay(task, [s.ground for s in attempt.steps])
         if problem:
             raise PlanningError(
                 f"the {self.engine} plan does not replay on the task ({problem}); this is a "

@@ -29,10 +29,13 @@ __all__ = [
     "GroundStep",
     "State",
     "StepEffects",
+    "Typing",
     "apply",
     "diagnose",
     "relevant_objects",
     "replay",
+    "unmet",
+    "unmet_goals",
 ]
 
 Pattern = tuple[str, tuple[str | None, ...]]
@@ -84,7 +87,10 @@ class State:
         return self._index.get((pred, position, value), set())
 
     def copy(self) -> State:
-        return State(self.facts)
+        new = State()
+        new.facts = set(self.facts)
+        new._index.update((k, set(v)) for k, v in self._index.items() if v)
+        return new
 
 
 def binding(schema: ActionSchema, args: Sequence[str]) -> dict[str, str]:
@@ -99,26 +105,35 @@ def _show(pred: str, args: Sequence[str | None]) -> str:
     return f"{pred}({', '.join(a or '?' for a in args)})"
 
 
+def unmet(task: PlanningTask, step: GroundStep, state: State) -> list[str]:
+    """The preconditions of ``step`` that are false in ``state`` (the state is unchanged)."""
+    schema = task.actions[step.action]
+    b = binding(schema, step.args)
+    failed = []
+    for lit in schema.pre:
+        fact = (lit.pred, _sub(lit.args, b))
+        if (fact in state) != lit.positive:
+            failed.append(("" if lit.positive else "not ") + _show(fact[0], fact[1]))
+    for preds, arg, positive in schema.empty_pre:
+        x = b.get(arg, arg)
+        if any(state.matching(p, 0, x) for p in preds) == positive:
+            failed.append(f"{'' if positive else 'not '}empty({x}, {'/'.join(preds)})")
+    return failed
+
+
 def apply(task: PlanningTask, step: GroundStep, state: State) -> tuple[list[str], StepEffects]:
     """Apply ``step`` to ``state`` in place; returns the preconditions that were false (the
     step is applied anyway) and what it read and wrote."""
     schema = task.actions[step.action]
     b = binding(schema, step.args)
-    failed: list[str] = []
-    reads: set[Fact] = set()
+    failed = unmet(task, step, state)
+    reads = {
+        (lit.pred, _sub(lit.args, b)) for lit in schema.pre if not task.predicates[lit.pred].static
+    }
     patterns: set[Pattern] = set()
-    for lit in schema.pre:
-        fact = (lit.pred, _sub(lit.args, b))
-        if not task.predicates[lit.pred].static:
-            reads.add(fact)
-        if (fact in state) != lit.positive:
-            failed.append(("" if lit.positive else "not ") + _show(fact[0], fact[1]))
-    for preds, arg, positive in schema.empty_pre:
+    for preds, arg, _ in schema.empty_pre:
         x = b.get(arg, arg)
-        present = [f for p in preds for f in state.matching(p, 0, x)]
         patterns |= {(p, (x, None)) for p in preds}
-        if bool(present) == positive:
-            failed.append(f"{'' if positive else 'not '}empty({x}, {'/'.join(preds)})")
     dels = {(lit.pred, _sub(lit.args, b)) for lit in schema.delete}
     for fd in schema.forall_delete:
         fixed = b.get(fd.fixed, fd.fixed)
@@ -168,55 +183,82 @@ Signed = tuple[str, tuple[str | None, ...], bool]
 _Writer = tuple[ActionSchema, tuple[str, ...], ForallDelete | None]
 
 
-def _writers(task: PlanningTask) -> dict[tuple[str, bool], list[_Writer]]:
-    """(predicate, sign) -> the actions' effects that make such facts hold with that sign."""
-    out: dict[tuple[str, bool], list[_Writer]] = defaultdict(list)
-    for schema in task.actions.values():
-        for lit in schema.add:
-            out[(lit.pred, True)].append((schema, lit.args, None))
-        for lit in schema.delete:
-            out[(lit.pred, False)].append((schema, lit.args, None))
-        for fd in schema.forall_delete:
-            args = (_FREE, fd.fixed) if fd.free_pos == 0 else (fd.fixed, _FREE)
-            out[(fd.delete, False)].append((schema, args, fd))
-    return out
+class _Writers:
+    """The actions' effects that make facts hold with a sign, found by (predicate, sign) and
+    by the effect's first argument when it is an element id (most are: agents' hardware)."""
+
+    def __init__(self, task: PlanningTask) -> None:
+        self._any: dict[tuple[str, bool], list[_Writer]] = defaultdict(list)
+        self._first: dict[tuple[str, bool, str], list[_Writer]] = defaultdict(list)
+        for schema in task.actions.values():
+            for lit in schema.add:
+                self._put(lit.pred, True, (schema, lit.args, None))
+            for lit in schema.delete:
+                self._put(lit.pred, False, (schema, lit.args, None))
+            for fd in schema.forall_delete:
+                args = (_FREE, fd.fixed) if fd.free_pos == 0 else (fd.fixed, _FREE)
+                self._put(fd.delete, False, (schema, args, fd))
+
+    def _put(self, pred: str, sign: bool, writer: _Writer) -> None:
+        first = writer[1][0] if writer[1] else "?"
+        if first[0] == "?" or first == _FREE:
+            self._any[(pred, sign)].append(writer)
+        else:
+            self._first[(pred, sign, first)].append(writer)
+
+    def get(self, pred: str, sign: bool, args: tuple[str | None, ...]) -> list[_Writer]:
+        """Writers whose effect may unify with ``pred(args)``."""
+        found = self._any.get((pred, sign), [])
+        if args and args[0] is not None:
+            return found + self._first.get((pred, sign, args[0]), [])
+        mine = [w for (p, s, _), ws in self._first.items() if (p, s) == (pred, sign) for w in ws]
+        return found + mine
 
 
-def _is_type(task: PlanningTask, obj: str, wanted: str) -> bool:
-    t: str | None = task.objects.get(obj)
-    while t is not None:
-        if t == wanted:
-            return True
-        t = task.types.get(t)
-    return wanted == ROOT
+class Typing:
+    """Which objects fit which types, memoized; the variables' types per action."""
+
+    def __init__(self, task: PlanningTask) -> None:
+        self.task = task
+        self.variables = {s.name: {f"?{n}": t for n, t in s.params} for s in task.actions.values()}
+        self._fits: dict[tuple[str, str], bool] = {}
+
+    def fits(self, obj: str, wanted: str) -> bool:
+        key = (obj, wanted)
+        found = self._fits.get(key)
+        if found is None:
+            t: str | None = self.task.objects.get(obj)
+            found = wanted == ROOT
+            while t is not None and not found:
+                found = t == wanted
+                t = self.task.types.get(t)
+            self._fits[key] = found
+        return found
 
 
 def _unify(
     eff: tuple[str, ...],
     pattern: tuple[str | None, ...],
-    schema: ActionSchema | None = None,
-    task: PlanningTask | None = None,
+    schema: ActionSchema,
+    typing: Typing,
 ) -> dict[str, str | None] | None:
-    """Bind the effect's variables to the pattern's objects (types checked when ``schema``
-    and ``task`` are given); None if they do not match."""
+    """Bind the effect's variables to the pattern's objects, of the variables' types; None
+    if they do not match."""
     b: dict[str, str | None] = {}
-    types = dict(schema.params) if schema is not None else {}
+    types = typing.variables[schema.name]
     for e, p in zip(eff, pattern, strict=True):
         if e == _FREE:
             b[e] = p
-        elif e.startswith("?"):
+        elif e[0] == "?":
             prev = b.get(e)
-            if prev is not None and p is not None and prev != p:
-                return None
-            if (
-                p is not None
-                and task is not None
-                and e[1:] in types
-                and not _is_type(task, p, types[e[1:]])
-            ):
-                return None
-            if prev is None:
+            if p is None:
+                b.setdefault(e, None)
+            elif prev is None:
+                if not typing.fits(p, types[e]):
+                    return None
                 b[e] = p
+            elif prev != p:
+                return None
         elif p is not None and e != p:
             return None
     return b
@@ -244,7 +286,11 @@ def _reads(
 
 
 def _subsumed(pattern: Signed, seen: set[Signed]) -> bool:
+    """``pattern`` or a pattern more general than it is in ``seen``."""
     pred, args, sign = pattern
+    if len(args) == 2:
+        a, c = args
+        return any((pred, g, sign) in seen for g in ((a, c), (None, c), (a, None), (None, None)))
     for mask in range(1 << len(args)):
         general = tuple(None if mask >> i & 1 else a for i, a in enumerate(args))
         if (pred, general, sign) in seen:
@@ -261,9 +307,11 @@ def relevant_objects(task: PlanningTask) -> set[str]:
     objects (a gripper's current content matters to an "empty gripper" precondition). Kept:
     every object named by a needed pattern or by an initial fact matching one, the goal's
     elements and the actions' constants."""
-    writers = _writers(task)
+    writers = _Writers(task)
+    typing = Typing(task)
     seen: set[Signed] = set()
     todo: deque[Signed] = deque()
+    expanded: set[tuple[str, tuple[tuple[str, str | None], ...], ForallDelete | None]] = set()
 
     def push(p: Signed, chase: bool) -> None:
         if not _subsumed(p, seen):
@@ -275,9 +323,13 @@ def relevant_objects(task: PlanningTask) -> set[str]:
         push((lit.pred, lit.args, lit.positive), True)
     while todo:
         pred, args, sign = todo.popleft()
-        for schema, eff, fd in writers.get((pred, sign), ()):
-            b = _unify(eff, args, schema, task)
-            if b is not None:
+        for schema, eff, fd in writers.get(pred, sign, args):
+            b = _unify(eff, args, schema, typing)
+            if b is None:
+                continue
+            key = (schema.name, tuple(sorted(b.items(), key=lambda kv: kv[0])), fd)
+            if key not in expanded:  # the same action instance, reached another way
+                expanded.add(key)
                 for p in _reads(schema, task, b, fd):
                     push(p, p[2])
     keep = {a for _, args, _ in seen for a in args if a is not None}
@@ -316,11 +368,17 @@ class _Relaxed:
                     break
                 t = task.types[t]
         self.work = 0
-        self.writers = _writers(task)
+        self.writers = _Writers(task)
+        self.typing = Typing(task)
 
     def _bindings(self, schema: ActionSchema) -> Iterator[dict[str, str]]:
+        """Bindings under which every positive precondition is reachable and no negative
+        precondition on a static predicate is false (static facts never change)."""
         lits = [lit for lit in schema.pre if lit.positive]
         lits.sort(key=lambda lit: len(self.by_pred.get(lit.pred, ())))
+        static = [
+            lit for lit in schema.pre if not lit.positive and self.task.predicates[lit.pred].static
+        ]
         types = {f"?{n}": t for n, t in schema.params}
 
         def rec(i: int, b: dict[str, str]) -> Iterator[dict[str, str]]:
@@ -329,23 +387,38 @@ class _Relaxed:
                 raise OverflowError
             if i == len(lits):
                 free = [v for v in types if v not in b]
-                yield from self._expand(free, types, b)
+                for full in self._expand(free, types, b):
+                    if not any((lit.pred, _sub(lit.args, full)) in self.facts for lit in static):
+                        yield full
                 return
-            lit = lits[i]
-            for fact in list(self.by_pred.get(lit.pred, ())):
-                nb = dict(b)
-                for a, v in zip(lit.args, fact[1], strict=True):
-                    if not a.startswith("?"):
-                        if a != v:
-                            break
-                    elif (a not in nb and not _is_type(self.task, v, types[a])) or nb.setdefault(
-                        a, v
-                    ) != v:
-                        break
-                else:
-                    yield from rec(i + 1, nb)
+            for fact in list(self.by_pred.get(lits[i].pred, ())):
+                extended = self._match(lits[i].args, fact[1], b, types)
+                if extended is not None:
+                    yield from rec(i + 1, extended)
 
         yield from rec(0, {})
+
+    def _match(
+        self,
+        args: tuple[str, ...],
+        values: tuple[str, ...],
+        b: dict[str, str],
+        types: Mapping[str, str],
+    ) -> dict[str, str] | None:
+        """``b`` extended so that ``args`` (variables and constants) become ``values``."""
+        out = dict(b)
+        for a, v in zip(args, values, strict=True):
+            if not a.startswith("?"):
+                if a != v:
+                    return None
+            elif a in out:
+                if out[a] != v:
+                    return None
+            elif self.typing.fits(v, types[a]):
+                out[a] = v
+            else:
+                return None
+        return out
 
     def _expand(
         self, free: list[str], types: Mapping[str, str], b: dict[str, str]
@@ -385,8 +458,8 @@ class _Relaxed:
         its preconditions never reached, ``depth`` levels down; "" if no action achieves it."""
         reasons: list[str] = []
         achievers = 0
-        for schema, eff, _ in self.writers.get((pred, True), ()):
-            b = _unify(eff, args, schema, self.task)
+        for schema, eff, _ in self.writers.get(pred, True, args):
+            b = _unify(eff, args, schema, self.typing)
             if b is None:
                 continue
             achievers += 1
@@ -432,8 +505,8 @@ def diagnose(task: PlanningTask) -> tuple[str, list[str]]:
             not lit.positive
             and (lit.pred, lit.args) in task.init
             and not any(
-                _unify(eff, lit.args, schema, task)
-                for schema, eff, _ in relaxed.writers.get((lit.pred, False), ())
+                _unify(eff, lit.args, schema, relaxed.typing)
+                for schema, eff, _ in relaxed.writers.get(lit.pred, False, lit.args)
             )
         ):
             unreachable.append(f"not {shown}")

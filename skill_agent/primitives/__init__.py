@@ -39,6 +39,7 @@ from .grasp import NoGraspError as NoGraspError
 from .grasp import extents as extents
 from .grasp import footprint_radius as footprint_radius
 from .grasp import free_spot as free_spot
+from .grasp import free_spots as free_spots
 from .grasp import plan_grasp as plan_grasp
 from .grasp import release_pose as release_pose
 from .gripper import close_gripper as close_gripper
@@ -65,6 +66,7 @@ __all__ = [
     "face",
     "footprint_radius",
     "free_spot",
+    "free_spots",
     "halt",
     "look_at",
     "move_cartesian",

@@ -41,6 +41,7 @@ __all__ = [
     "extents",
     "footprint_radius",
     "free_spot",
+    "free_spots",
     "plan_grasp",
     "release_pose",
 ]
@@ -223,6 +224,37 @@ def release_pose(
     )
 
 
+def free_spots(
+    container: Transform,
+    ext: Vec3,
+    radius: float,
+    occupied: Sequence[tuple[Vec3, float]] = (),
+    *,
+    wall: float = 0.008,
+    gap: float = 0.012,
+) -> list[Vec3]:
+    """Free points on the container's inner floor (world, m) for an object of footprint
+    ``radius``: on a grid over the floor, away from the walls and from each ``(position,
+    radius)`` in ``occupied`` by ``gap``; nearest the centre first. ``container`` is the
+    world pose of the container's centre, ``ext`` its outside extents."""
+    hx, hy = ext[0] / 2 - wall - radius - gap / 2, ext[1] / 2 - wall - radius - gap / 2
+    if hx < 0 or hy < 0:
+        return []
+    step = 2 * radius + gap
+    floor = -ext[2] / 2 + wall
+    found: list[tuple[float, Vec3]] = []
+    for lx in _grid(hx, step):
+        for ly in _grid(hy, step):
+            point = container.apply((lx, ly, floor))
+            clear = all(
+                math.hypot(point[0] - p[0], point[1] - p[1]) >= radius + r + gap
+                for p, r in occupied
+            )
+            if clear:
+                found.append((math.hypot(lx, ly), point))
+    return [point for _, point in sorted(found, key=lambda f: f[0])]
+
+
 def free_spot(
     container: Transform,
     ext: Vec3,
@@ -232,28 +264,9 @@ def free_spot(
     wall: float = 0.008,
     gap: float = 0.012,
 ) -> Vec3 | None:
-    """A free point on the container's inner floor (world, m) for an object of footprint
-    ``radius``: on a grid over the floor, away from the walls and from each ``(position,
-    radius)`` in ``occupied`` by ``gap``; the one nearest the centre. ``container`` is the
-    world pose of the container's centre, ``ext`` its outside extents. None: no room."""
-    hx, hy = ext[0] / 2 - wall - radius - gap / 2, ext[1] / 2 - wall - radius - gap / 2
-    if hx < 0 or hy < 0:
-        return None
-    step = 2 * radius + gap
-    xs = _grid(hx, step)
-    ys = _grid(hy, step)
-    floor = -ext[2] / 2 + wall
-    best: tuple[float, Vec3] | None = None
-    for lx in xs:
-        for ly in ys:
-            point = container.apply((lx, ly, floor))
-            clear = all(
-                math.hypot(point[0] - p[0], point[1] - p[1]) >= radius + r + gap
-                for p, r in occupied
-            )
-            if clear and (best is None or math.hypot(lx, ly) < best[0]):
-                best = (math.hypot(lx, ly), point)
-    return None if best is None else best[1]
+    """The first of :func:`free_spots` (nearest the centre), or None: no room."""
+    spots = free_spots(container, ext, radius, occupied, wall=wall, gap=gap)
+    return spots[0] if spots else None
 
 
 def _grid(half: float, step: float) -> list[float]:

@@ -4,6 +4,7 @@ newtons."""
 
 from __future__ import annotations
 
+from device_drivers.errors import CommandError
 from device_drivers.interfaces import Gripper, GripperState
 
 from .supervise import supervise
@@ -32,6 +33,10 @@ async def close_gripper(
 
 async def release(gripper: Gripper, *, extra: float = 0.02, timeout: float | None = None) -> None:
     """Let go of the held object by opening only ``extra`` m wider than the fingers stand now
-    (less sweep than a full opening, so neighbours in a tight box are not pushed)."""
+    (less sweep than a full opening, so neighbours in a tight box are not pushed); fully, if
+    the gripper cannot open that wide."""
     state = await gripper.state()
-    await open_gripper(gripper, state.opening + extra, timeout=timeout)
+    try:
+        await open_gripper(gripper, state.opening + extra, timeout=timeout)
+    except CommandError:  # wider than it opens: nothing moved
+        await open_gripper(gripper, timeout=timeout)

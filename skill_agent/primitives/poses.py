@@ -102,24 +102,26 @@ def to_transform(pose: WorldPose | Pose) -> Transform:
     """A device or world-model pose as a transform (the world-model pose's frame is ignored:
     pass world poses, e.g. from ``wm.spatial.world_pose``)."""
     if isinstance(pose, WorldPose):
-        return Transform(
-            (pose.x, pose.y, pose.z), _normalised((pose.qx, pose.qy, pose.qz, pose.qw))
-        )
-    p, o = pose.position, pose.orientation
-    return Transform((p.x, p.y, p.z), _normalised((o.x, o.y, o.z, o.w)))
+        position = (pose.x, pose.y, pose.z)
+        rotation = (pose.qx, pose.qy, pose.qz, pose.qw)
+    else:
+        p, o = pose.position, pose.orientation
+        position, rotation = (p.x, p.y, p.z), (o.x, o.y, o.z, o.w)
+    x, y, z = (float(c) for c in position)  # drivers may hand numpy floats
+    return Transform((x, y, z), _normalised(rotation))
 
 
 def to_world_pose(t: Transform) -> WorldPose:
-    x, y, z = t.translation
-    qx, qy, qz, qw = t.rotation
+    x, y, z = (float(c) for c in t.translation)
+    qx, qy, qz, qw = (float(c) for c in t.rotation)
     return WorldPose(x, y, z, qx, qy, qz, qw)
 
 
 def to_wm_pose(pose: WorldPose | Transform) -> Pose:
     """A world-frame world-model :class:`Pose` (frame ``""``)."""
     t = pose if isinstance(pose, Transform) else to_transform(pose)
-    x, y, z = t.translation
-    qx, qy, qz, qw = t.rotation
+    x, y, z = (float(c) for c in t.translation)
+    qx, qy, qz, qw = (float(c) for c in t.rotation)
     return Pose(Position(x, y, z), Orientation(qx, qy, qz, qw))
 
 
@@ -150,5 +152,5 @@ def _normalised(q: Quat) -> Quat:
     n = math.sqrt(sum(c * c for c in q))
     if n < 1e-12 or not math.isfinite(n):
         raise ValueError(f"not a rotation quaternion: {q}")
-    qx, qy, qz, qw = (c / n for c in q)
+    qx, qy, qz, qw = (float(c) / n for c in q)
     return (qx, qy, qz, qw)

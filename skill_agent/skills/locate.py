@@ -17,15 +17,7 @@ from ..errors import SkillFailure
 from ..protocol import HasPropertyCond, SkillDescription
 from ..skill import Skill, SkillContext
 from .params import OBJECT, PLATFORM, SENSOR
-from .sensing import (
-    containing,
-    detect_all,
-    move_ops,
-    observation_ops,
-    sensors_of,
-    sightings,
-    still_inside,
-)
+from .sensing import containing, look, move_ops, observation_ops, sensors_of, still_inside
 from .support import element_id, wm_of
 
 __all__ = ["Locate", "locate_object"]
@@ -36,15 +28,14 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
     module doc). Raises SkillFailure when no sensor sees it."""
     wm = wm_of(ctx)
     target = wm.get_element(element_id(ctx, param))
-    sensors = sensors_of(ctx, "sensor", "platform")
-    if not sensors:
+    sensors = sensors_of(ctx)
+    if not sensors.devices:
         raise SkillFailure(f"{ctx.description.name}: no sensor bound to look for {target.id}")
-    seen = sightings(wm, target, await detect_all(sensors))
+    seen = await look(wm, target, sensors)
     if not seen:
-        names = ", ".join(source for source, _ in sensors)
         raise SkillFailure(
             f"{ctx.description.name}: {target.label or target.id} ({target.id}) is not seen by "
-            f"{names}"
+            f"{sensors.names}"
         )
     ops = observation_ops(target.id, seen)
     holder = wm.get_parent(target.id)

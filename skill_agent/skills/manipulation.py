@@ -8,16 +8,17 @@ from __future__ import annotations
 
 import math
 
-from device_drivers.interfaces import Arm, Gripper
+from device_drivers.interfaces import Arm, Gripper, WorldPose
 from wm_store.client import WmClient
+from wm_store.vocab import Prop
 
 from ..errors import SkillFailure
-from ..primitives import halt, open_gripper
+from ..primitives import extents, halt, move_joints, open_gripper
 from ..primitives.poses import Vec3, axis
 from ..skill import SkillContext
-from .support import device, world_transform
+from .support import device, element_id, tracked, wm_of, world_transform
 
-__all__ = ["UP", "arm_of", "front_of", "gripper_of", "make_safe"]
+__all__ = ["UP", "arm_of", "depth_inside", "front_of", "go_home", "gripper_of", "make_safe"]
 
 UP: Vec3 = (0.0, 0.0, 1.0)
 
@@ -40,6 +41,40 @@ def front_of(wm: WmClient, appliance: str) -> Vec3:
     if n < 1e-6:
         raise SkillFailure(f"{appliance} lies on its back: its front points up")
     return (x[0] / n, x[1] / n, 0.0)
+
+
+def depth_inside(wm: WmClient, appliance: str, tcp: WorldPose) -> float:
+    """How far (m) the tcp is behind the appliance's front plane (0 when in front of it): what
+    a straight move out along the front must cover before the hand is clear."""
+    pose, front = world_transform(wm, appliance), front_of(wm, appliance)
+    size = extents(wm.get_element(appliance).properties.get(Prop.size))
+    if pose is None or size is None:
+        return 0.0
+    cx, cy, _ = pose.translation
+    plane = (cx + front[0] * size[0] / 2, cy + front[1] * size[0] / 2)
+    return max(0.0, (plane[0] - tcp.x) * front[0] + (plane[1] - tcp.y) * front[1])
+
+
+async def go_home(ctx: SkillContext, arm: Arm) -> None:
+    """Move the arm to its home posture (the arm element's ``jointPositions``, one value per
+    joint in the arm's joint order, rad), by a joint motion: the safe way between a pick in
+    front and a place behind, whatever IK branch the last motion ended on. Nothing to do if
+    the world model has no home posture for the arm."""
+    home = wm_of(ctx).get_element(element_id(ctx, "arm")).properties.get(Prop.jointPositions)
+    if not isinstance(home, list):
+        return
+    names = list((await arm.state()).joints)
+    values = [float(v) for v in home if isinstance(v, int | float) and not isinstance(v, bool)]
+    if len(values) != len(names):
+        raise SkillFailure(
+            f"{arm.name}: jointPositions has {len(values)} values for {len(names)} joints"
+        )
+    await tracked(
+        ctx,
+        f"{arm.name} to its home posture",
+        lambda cb: move_joints(arm, dict(zip(names, values, strict=True)), progress=cb),
+        step="home",
+    )
 
 
 async def make_safe(ctx: SkillContext) -> None:

@@ -12,9 +12,11 @@ model. A stop halts the arm; the gripper keeps a grasped object and opens otherw
 
 from __future__ import annotations
 
+from collections.abc import Awaitable, Callable
 from typing import ClassVar
 
 from device_drivers.errors import DeviceError, GraspLostError
+from device_drivers.interfaces import Arm, ProgressCallback, WorldPose
 from wm_store.vocab import Cls, Rel
 
 from ..errors import SkillFailure
@@ -23,7 +25,7 @@ from ..primitives.poses import Vec3
 from ..protocol import ParamSpec, RelationCond, SkillDescription
 from ..skill import Skill, SkillContext
 from .locate import locate_object
-from .manipulation import UP, arm_of, front_of, gripper_of, make_safe
+from .manipulation import UP, arm_of, depth_inside, front_of, go_home, gripper_of, make_safe
 from .params import (
     ARM,
     GRIPPER,
@@ -41,13 +43,25 @@ from .params import (
 )
 from .support import element_id, failure, float_param, geometry, tracked, wm_of
 
-__all__ = ["Pick", "TakeOut"]
+__all__ = ["TAKE_OUT_RAISE", "Lift", "Pick", "TakeOut"]
+
+Lift = list[tuple[Vec3, float]]
+"""Straight moves after a grasp: (direction in the world, distance in m)."""
+TAKE_OUT_RAISE = 0.015
+"""How far (m) an object is raised off an appliance's floor before it is pulled out."""
 
 _TUNING = [
     offline("force", "float", 20.0, "squeeze force per finger, N"),
     offline("approach", "float", 0.10, "pre-grasp distance back along the approach, m"),
     offline("lift", "float", 0.12, "how far the grasped object is lifted (or pulled out), m"),
 ]
+
+
+def _straight(
+    arm: Arm, distance: float, direction: Vec3
+) -> Callable[[ProgressCallback], Awaitable[WorldPose]]:
+    """A straight move of ``distance`` m along ``direction``, waiting for a progress callback."""
+    return lambda cb: retreat(arm, distance, direction=direction, progress=cb)
 
 
 class Pick(Skill):
@@ -87,9 +101,10 @@ class Pick(Skill):
     def __init__(self) -> None:
         self.lost = ""
 
-    def directions(self, ctx: SkillContext) -> tuple[Vec3 | None, Vec3]:
-        """The approach direction (None: the grasp's own axis) and the lift direction."""
-        return None, UP
+    def travel(self, ctx: SkillContext, tcp: WorldPose) -> tuple[Vec3 | None, float, Lift]:
+        """For a grasp at ``tcp``: the approach direction (None: the grasp's own axis), the
+        pre-grasp distance (m) and the lift: straight moves (direction, m) after the grasp."""
+        return None, float_param(ctx, "approach"), [(UP, float_param(ctx, "lift"))]
 
     async def pre_sense(self, ctx: SkillContext) -> None:
         await locate_object(ctx)
@@ -111,10 +126,10 @@ class Pick(Skill):
             )
         except NoGraspError as exc:
             raise SkillFailure(f"pick: {obj.label}: {exc}") from exc
-        inward, lift = self.directions(ctx)
-        offset = float_param(ctx, "approach")
+        inward, offset, lift = self.travel(ctx, grasp.tcp)
         try:
             await open_gripper(gripper)
+            await go_home(ctx, arm)
             await tracked(
                 ctx,
                 f"approaching {obj.label} ({grasp.strategy} grasp)",
@@ -124,13 +139,15 @@ class Pick(Skill):
             )
             await ctx.progress(f"closing on {obj.label}", step="grasp", fraction=0.6)
             await close_gripper(gripper, float_param(ctx, "force"), expect=obj.label)
-            await tracked(
-                ctx,
-                f"lifting {obj.label}",
-                lambda cb: retreat(arm, float_param(ctx, "lift"), direction=lift, progress=cb),
-                step="lift",
-                start=0.7,
-            )
+            for k, (direction, distance) in enumerate(lift):
+                await tracked(
+                    ctx,
+                    f"lifting {obj.label}" if k == 0 else f"pulling {obj.label} out",
+                    _straight(arm, distance, direction),
+                    step="lift",
+                    start=0.7 + 0.3 * k / len(lift),
+                    end=0.7 + 0.3 * (k + 1) / len(lift),
+                )
         except GraspLostError as exc:  # slipped while lifting: post_sense tells
             self.lost = str(exc)
         except (DeviceError, ValueError) as exc:
@@ -186,6 +203,11 @@ class TakeOut(Pick):
     )
     holder_param = "appliance"
 
-    def directions(self, ctx: SkillContext) -> tuple[Vec3 | None, Vec3]:
-        front = front_of(wm_of(ctx), element_id(ctx, "appliance"))
-        return (-front[0], -front[1], 0.0), front
+    def travel(self, ctx: SkillContext, tcp: WorldPose) -> tuple[Vec3 | None, float, Lift]:
+        """In through the front from ``approach`` m back; out: 1.5 cm up, then along the
+        front until ``lift`` m clear of it."""
+        wm, appliance = wm_of(ctx), element_id(ctx, "appliance")
+        front, inside = front_of(wm, appliance), depth_inside(wm, appliance, tcp)
+        inward: Vec3 = (-front[0], -front[1], 0.0)
+        out: Lift = [(UP, TAKE_OUT_RAISE), (front, inside + float_param(ctx, "lift"))]
+        return inward, float_param(ctx, "approach"), out

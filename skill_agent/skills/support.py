@@ -39,6 +39,8 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+PROGRESS_STEP = 0.02
+"""Smallest change of a run's fraction done that is published as a progress event."""
 D = TypeVar("D", bound=Device)
 
 
@@ -139,7 +141,7 @@ async def tracked(
         while True:
             await box[0].wait()
             box[0] = anyio.Event()
-            if abs(latest[0] - sent) >= 1e-3:
+            if abs(latest[0] - sent) >= PROGRESS_STEP:
                 sent = latest[0]
                 await ctx.progress(message, fraction=sent, step=step)
 

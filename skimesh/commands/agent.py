@@ -290,7 +290,7 @@ def _convert(raw: str, kind: str, key: str) -> Value:
     except (ValueError, msgspec.MsgspecError) as e:
         if kind in ("any", "list", "Size"):
             return raw  # not JSON: a plain string (the agent checks the kind)
-        raise SkillError(f"parameter {key}: {raw!r} is not a {kind} ({e})") from None
+        raise SkillError(f"parameter {key}: {raw!r} is no valid {kind} ({e})") from None
     return raw  # str, or an element id
 
 

@@ -513,7 +513,7 @@ def test_cli_run_skills_and_agents(site: Site) -> None:
     refused = skimesh(site, "run", "picker", "prob")
     assert refused.returncode == 2 and "did you mean 'probe'" in refused.stderr
     bad = skimesh(site, "run", "picker", "probe", "seconds=soon")
-    assert bad.returncode == 2 and "not a float" in bad.stderr
+    assert bad.returncode == 2 and "no valid float" in bad.stderr
     lost = skimesh(site, "run", "nobody", "noop", "--timeout", "0.5")
     assert lost.returncode == 3 and "did not answer" in lost.stderr
     listing = skimesh(site, "skills", "mover", "--json")

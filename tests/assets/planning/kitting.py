@@ -1,19 +1,21 @@
 """Kitting (SkiROS / STAMINA): mobile manipulators carry a kit box each and fill it with parts
-taken from part boxes at stations.
+taken from part boxes at stations; a smart microwave with its own agent (FRIEND II).
 
-Skills, written as the standard library's descriptions will be:
+Skills, written as the standard library (``skill_agent.skills``) describes them:
 
-``navigate(robot, start, goal)``
-    robot at ``start`` and not at ``goal`` -> at ``goal``, not at ``start``.
-``pick(object, box, station, gripper, robot)``
-    gripper empty, the box contains the object, box and robot at the station -> the gripper
-    contains the object (which leaves the box: ``contain`` is spatial).
-``place(object, container, gripper, robot)``
-    the gripper holds the object, the robot carries the container -> the container contains
-    it and the gripper is empty.
-``take_out(object, appliance, station, gripper, robot)``
-    like pick, from an appliance whose door is open; ``open_door(appliance, station, robot)``
-    opens it.
+``navigate(robot, base, start, goal)``
+    robot at ``start``, not at ``goal``, the goal has a pose -> at ``goal``, not at ``start``.
+``pick(object, holder, location, robot, arm, gripper, sensor[, platform])``
+    gripper empty, the holder (not an appliance) contains the object, robot and holder at the
+    location -> the gripper contains the object (which leaves the holder: ``contain`` is
+    spatial). ``mass < 5`` is checked at run time only.
+``place(object, container, robot, arm, gripper, sensor[, platform])``
+    the gripper holds the object, the robot carries the container (not full: run time only)
+    -> the container contains it, the gripper does not.
+``take_out(object, appliance, location, ...)``
+    like pick, from an appliance whose door is open.
+``open_door(appliance, door)``
+    the appliance agent's own skill: door closed, not heating -> door open.
 """
 
 from __future__ import annotations
@@ -24,24 +26,56 @@ import msgspec
 
 from skill_agent.protocol import (
     EmptyCond,
+    HasPropertyCond,
+    IsTypeCond,
+    NotCond,
     ParamSpec,
     PropertyCond,
     RelationCond,
     SkillDescription,
 )
 from wm_store.ontology import Ontology
-from wm_store.protocol import AddElement, Element, Op, Query, Relation, SetRelation
+from wm_store.protocol import (
+    AddElement,
+    Element,
+    Op,
+    Pose,
+    Position,
+    Query,
+    Relation,
+    SetRelation,
+    Value,
+)
 from wm_store.query import match_relations, resolve
 from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec, registration_ops
 from wm_store.state import SceneState
 from wm_store.transactions import apply_transaction
 
+OBJECT = ParamSpec(name="object", type="PhysicalObject")
+LOCATION = ParamSpec(name="location", type="Location")
 ROBOT = ParamSpec(name="robot", type="Robot", kind="hardware")
+ARM = ParamSpec(name="arm", type="Arm", kind="hardware")
 GRIPPER = ParamSpec(name="gripper", type="Gripper", kind="hardware")
-STATION = ParamSpec(name="station", type="Location")
+SENSOR = ParamSpec(name="sensor", type="Sensor", kind="hardware")
+PLATFORM = ParamSpec(name="platform", type="SmartPlatform", kind="hardware", optional=True)
+DEVICES = [ROBOT, ARM, GRIPPER, SENSOR, PLATFORM]
+
+
+def contains(holder: str, thing: str, holds: bool = True) -> RelationCond:
+    return RelationCond(subject=holder, predicate="contain", object=thing, holds=holds)
+
+
+def at(thing: str, location: str, holds: bool = True) -> RelationCond:
+    return RelationCond(subject=thing, predicate="at", object=location, holds=holds)
+
+
+def door_is(appliance: str, open_: bool) -> PropertyCond:
+    return PropertyCond(param=appliance, property="doorOpen", value=open_)
+
 
 NAVIGATE = SkillDescription(
     name="navigate",
+    skill_type="navigate",
     doc="Drive the robot to a location.",
     parameters=[
         ROBOT,
@@ -51,88 +85,84 @@ NAVIGATE = SkillDescription(
         ParamSpec(name="speed", type="float", kind="offline", default=0.5),
     ],
     pre=[
-        RelationCond(subject="robot", predicate="at", object="start"),
-        RelationCond(subject="robot", predicate="at", object="goal", holds=False),
+        at("robot", "start"),
+        at("robot", "goal", holds=False),
+        HasPropertyCond(param="goal", property="pose"),
     ],
-    post=[
-        RelationCond(subject="robot", predicate="at", object="goal"),
-        RelationCond(subject="robot", predicate="at", object="start", holds=False),
-    ],
-    duration=4.0,
+    post=[at("robot", "goal"), at("robot", "start", holds=False)],
+    duration=5.0,
 )
 
 PICK = SkillDescription(
     name="pick",
-    doc="Pick a part out of a box at the robot's station.",
+    skill_type="pick",
+    doc="Grasp an object from what holds it at the robot's location.",
     parameters=[
-        ParamSpec(name="object", type="Part"),
-        ParamSpec(name="box", type="Box"),
-        STATION,
-        GRIPPER,
-        ROBOT,
+        OBJECT,
+        ParamSpec(name="holder", type="PhysicalObject"),
+        LOCATION,
+        *DEVICES,
+        ParamSpec(name="force", type="float", kind="offline", default=20.0),
     ],
     pre=[
         EmptyCond(param="gripper"),
-        RelationCond(subject="box", predicate="contain", object="object"),
-        RelationCond(subject="box", predicate="at", object="station"),
-        RelationCond(subject="robot", predicate="at", object="station"),
+        contains("holder", "object"),
+        NotCond(item=IsTypeCond(param="holder", cls="Appliance")),
+        at("robot", "location"),
+        at("holder", "location"),
         PropertyCond(param="object", property="mass", op="lt", value=5.0),  # run time only
     ],
-    post=[RelationCond(subject="gripper", predicate="contain", object="object")],
-    duration=3.0,
+    hold=[contains("holder", "object")],
+    post=[contains("gripper", "object")],
+    duration=4.0,
 )
 
 PLACE = SkillDescription(
     name="place",
-    doc="Put the held part into a container the robot carries.",
-    parameters=[
-        ParamSpec(name="object", type="Part"),
-        ParamSpec(name="container", type="Container"),
-        GRIPPER,
-        ROBOT,
-    ],
+    skill_type="place",
+    doc="Put the held object into a container the robot carries.",
+    parameters=[OBJECT, ParamSpec(name="container", type="Container"), *DEVICES],
     pre=[
-        RelationCond(subject="gripper", predicate="contain", object="object"),
-        RelationCond(subject="robot", predicate="contain", object="container"),
+        contains("gripper", "object"),
+        contains("robot", "container"),
+        EmptyCond(param="container", full=True, holds=False),  # run time only: not full
     ],
-    post=[
-        RelationCond(subject="container", predicate="contain", object="object"),
-        EmptyCond(param="gripper"),
-    ],
-    duration=2.0,
+    hold=[contains("gripper", "object")],
+    post=[contains("container", "object"), contains("gripper", "object", holds=False)],
+    duration=4.0,
 )
 
 TAKE_OUT = SkillDescription(
     name="take_out",
-    doc="Take a part out of an appliance whose door is open.",
-    parameters=[
-        ParamSpec(name="object", type="PhysicalObject"),
-        ParamSpec(name="appliance", type="Appliance"),
-        STATION,
-        GRIPPER,
-        ROBOT,
-    ],
+    skill_type="pick",
+    doc="Take an object out of an appliance whose door is open.",
+    parameters=[OBJECT, ParamSpec(name="appliance", type="Appliance"), LOCATION, *DEVICES],
     pre=[
         EmptyCond(param="gripper"),
-        RelationCond(subject="appliance", predicate="contain", object="object"),
-        RelationCond(subject="appliance", predicate="at", object="station"),
-        RelationCond(subject="robot", predicate="at", object="station"),
-        PropertyCond(param="appliance", property="doorOpen", value=True),
+        contains("appliance", "object"),
+        door_is("appliance", True),
+        at("robot", "location"),
+        at("appliance", "location"),
     ],
-    post=[RelationCond(subject="gripper", predicate="contain", object="object")],
-    duration=3.0,
+    hold=[contains("appliance", "object"), door_is("appliance", True)],
+    post=[contains("gripper", "object")],
+    duration=5.0,
 )
 
 OPEN_DOOR = SkillDescription(
     name="open_door",
-    doc="Open an appliance's door.",
-    parameters=[ParamSpec(name="appliance", type="Appliance"), STATION, ROBOT],
-    pre=[
-        RelationCond(subject="appliance", predicate="at", object="station"),
-        RelationCond(subject="robot", predicate="at", object="station"),
-        PropertyCond(param="appliance", property="doorOpen", value=False),
+    skill_type="open_door",
+    doc="Open the appliance's door with its own motor.",
+    parameters=[
+        ParamSpec(name="appliance", type="Appliance", kind="hardware"),
+        ParamSpec(name="door", type="Door"),
     ],
-    post=[PropertyCond(param="appliance", property="doorOpen", value=True)],
+    pre=[
+        RelationCond(subject="appliance", predicate="hasA", object="door"),
+        door_is("appliance", False),
+        PropertyCond(param="appliance", property="heating", value=False),
+    ],
+    post=[door_is("appliance", True)],
     duration=2.0,
 )
 
@@ -180,6 +210,10 @@ class KittingScene(msgspec.Struct, kw_only=True):
     depot: str
 
 
+def _pose(x: float) -> dict[str, Value]:
+    return {"pose": Pose(Position(float(x) * 2.0, 0.0, 0.0))}
+
+
 def _apply(state: SceneState, ontology: Ontology, ops: Sequence[Op]) -> dict[str, str]:
     result = apply_transaction(state, ontology, ops, revision=state.revision + 1, now=1.0)
     state.revision += 1
@@ -200,9 +234,13 @@ def kitting_scene(
     onto = ontology or Ontology.default()
     state = SceneState()
     state.set_spatial_predicates(n for n, r in onto.relations.items() if r.spatial)
-    ops: list[Op] = [AddElement(type="Location", label="depot", ref="$depot")]
+    ops: list[Op] = [AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0))]
     for s in range(stations):
-        ops.append(AddElement(type="Station", label=f"station-{s + 1}", ref=f"$s{s}"))
+        ops.append(
+            AddElement(
+                type="Station", label=f"station-{s + 1}", ref=f"$s{s}", properties=_pose(s + 1)
+            )
+        )
         for b in range(boxes_per_station):
             ops.append(
                 AddElement(
@@ -239,6 +277,7 @@ def kitting_scene(
                 DeviceSpec(type="Arm", label=f"arm-{r + 1}"),
                 DeviceSpec(type="Gripper", label=f"gripper-{r + 1}"),
                 DeviceSpec(type="MobileBase", label=f"base-{r + 1}"),
+                DeviceSpec(type="Camera", label=f"camera-{r + 1}"),
             ],
             skills=skill_specs,
         )
@@ -272,10 +311,16 @@ def kitting_scene(
 
 
 def add_microwave(
-    scene: KittingScene, *, station: int = 1, door_open: bool = False, content: str = "hot gear"
+    scene: KittingScene,
+    *,
+    station: int = 1,
+    door_open: bool = False,
+    content: str = "hot gear",
+    skills: Sequence[SkillDescription] = (),
 ) -> tuple[str, str]:
-    """A microwave at ``stations[station]`` (door as given) holding a gear labelled
-    ``content``; returns (microwave id, gear id)."""
+    """A microwave (with its door) at ``stations[station]`` holding a gear labelled
+    ``content``; with ``skills``, an appliance agent ``oven-agent`` controls it and offers them.
+    Returns (microwave id, gear id)."""
     state, onto = scene.view.state, scene.view.ontology
     where = scene.stations[station]
     ids = _apply(
@@ -290,10 +335,26 @@ def add_microwave(
                 relations=[Relation(where, "contain", "$"), Relation("$", "at", where)],
             ),
             AddElement(
+                type="MicrowaveDoor", label="oven door", relations=[Relation("$m", "hasA", "$")]
+            ),
+            AddElement(
                 type="Gear", label=content, ref="$g", relations=[Relation("$m", "contain", "$")]
             ),
         ],
     )
+    if skills:
+        reg = RobotRegistration(
+            agent="oven-agent",
+            agent_type="DeviceAgent",
+            robot_type="Microwave",
+            robot_label="oven",
+            skills=[
+                SkillSpec(name=d.name, skill_type=d.family, description=_json.encode(d).decode())
+                for d in skills
+            ],
+        )
+        subclasses = {c: onto.subclasses(c) for c in ("Agent", "Robot", "Skill")}
+        _apply(state, onto, registration_ops(state, reg, subclasses=subclasses))
     return ids["$m"], ids["$g"]
 
 

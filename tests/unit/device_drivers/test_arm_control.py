@@ -26,7 +26,9 @@ from device_drivers.world import SimWorld, WorldOptions, running_world
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 
-KITTING = Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+KITTING = (
+    Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+)
 READY = {"shoulder_lift": 0.4, "elbow": 1.5, "wrist_pitch": 1.24}
 
 

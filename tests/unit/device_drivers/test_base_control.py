@@ -17,7 +17,9 @@ from device_drivers.robot_spec import Pose2D
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import SimWorld, WorldOptions, running_world
 
-KITTING = Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+KITTING = (
+    Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+)
 HALF = (0.3, 0.225)
 PILLAR = Footprint("Pillar-1", 1.0, 0.0, 0.0, 0.2, 0.2)
 

@@ -19,7 +19,9 @@ from device_drivers.world import SimWorld, WorldOptions, running_world
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 
-KITTING = Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+KITTING = (
+    Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "kitting" / "scenario.toml"
+)
 READY = {"shoulder_lift": 0.4, "elbow": 1.5, "wrist_pitch": 1.24}
 CARRY = {"shoulder_lift": -0.3, "elbow": 1.6, "wrist_pitch": 1.0}
 
@@ -148,4 +150,3 @@ async def test_physics_only_mode_never_welds(physics_world: SimWorld) -> None:
     assert await welds_on(world) == []
     assert world.body_pose("Gear-2").z > part.z + 0.08  # carried by friction alone
     assert (await gripper.state()).holding == "Gear-2"
-

@@ -86,7 +86,7 @@ def test_unknown_field_names_file_and_path() -> None:
 
 def test_bad_value_names_the_field() -> None:
     with pytest.raises(ScenarioError, match=r"\$\.parts\[0\]\.mass"):
-        parse_scenario(MINIMAL.replace('size = [0.02, 0.02]', "size = [0.02, 0.02]\nmass = -1"))
+        parse_scenario(MINIMAL.replace("size = [0.02, 0.02]", "size = [0.02, 0.02]\nmass = -1"))
 
 
 def test_size_must_match_shape() -> None:

@@ -43,8 +43,11 @@ async def test_fixed_camera_sees_the_parts_with_noise() -> None:
         assert det.source == "Camera-1" and 0.05 <= det.confidence <= 1.0
         p = det.pose
         assert error(world, det.name, p.x, p.y, p.z) < 0.05  # noise ~4 mm/m, 2 m away
-        assert (p.x, p.y, p.z) != (by_name[det.name].pose.x, by_name[det.name].pose.y,
-                                   by_name[det.name].pose.z)  # fresh noise each time
+        assert (p.x, p.y, p.z) != (
+            by_name[det.name].pose.x,
+            by_name[det.name].pose.y,
+            by_name[det.name].pose.z,
+        )  # fresh noise each time
     gear = next(d for d in first if d.name == "Gear-1")
     assert gear.type == "Gear"
 

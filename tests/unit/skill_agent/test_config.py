@@ -8,8 +8,10 @@ from pathlib import Path
 import pytest
 
 from skill_agent.config import AgentConfig, load_config, parse_config
-from skill_agent.errors import SkillLoadError
-from skill_agent.protocol import PropertyCond
+from skill_agent.errors import SkillError, SkillLoadError
+from skill_agent.protocol import ParamSpec, PropertyCond, SkillDescription
+from skimesh.commands.agent import parse_params, scenario_config_path
+from wm_store.protocol import Position
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -133,3 +135,42 @@ def test_probabilities_must_name_loaded_skills() -> None:
     parse_config('name = "r1"\n[simulation]\nprobabilities = { pick = 0.5 }').check_skill_names(
         ["pick"]
     )
+
+
+def test_scenario_configs_map_to_their_path() -> None:
+    with pytest.raises(FileNotFoundError, match=r"scenarios/nope/agents/r1\.toml.*'nope': none"):
+        scenario_config_path("nope", "r1")
+
+
+def test_command_line_parameters_follow_the_declared_types() -> None:
+    desc = SkillDescription(
+        name="s",
+        parameters=[
+            ParamSpec(name="t", type="float"),
+            ParamSpec(name="n", type="int"),
+            ParamSpec(name="b", type="bool"),
+            ParamSpec(name="part", type="Gear"),
+            ParamSpec(name="p", type="Position"),
+            ParamSpec(name="anything", type="any"),
+        ],
+    )
+    got = parse_params(
+        ["t=1", "n=2", "b=yes", "part=Gear-1", 'p={"x": 1, "y": 2, "z": 3}', "anything=[1, 2]"],
+        desc,
+    )
+    assert got == {
+        "t": 1.0,
+        "n": 2,
+        "b": True,
+        "part": "Gear-1",
+        "p": Position(1.0, 2.0, 3.0),
+        "anything": [1, 2],
+    }
+    assert parse_params(["anything=plain words", "extra=3"], desc) == {
+        "anything": "plain words",
+        "extra": 3,
+    }, "not JSON: a string; unknown names pass through (the agent names the closest)"
+    with pytest.raises(SkillError, match="parameter n: 'two' is no valid int"):
+        parse_params(["n=two"], desc)
+    with pytest.raises(SkillError, match="KEY=VALUE"):
+        parse_params(["oops"], desc)

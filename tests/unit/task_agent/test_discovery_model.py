@@ -17,8 +17,8 @@ def test_agents_with_robot_devices_and_skills() -> None:
     assert [a.name for a in agents] == ["r1", "r2"]
     r1 = agents[0]
     assert r1.robot == scene.robots[0]
-    assert r1.devices == ("Arm-1", "Gripper-1", "MobileBase-1")
-    assert r1.hardware == (scene.robots[0], "Arm-1", "Gripper-1", "MobileBase-1")
+    assert r1.devices == ("Arm-1", "Camera-1", "Gripper-1", "MobileBase-1")
+    assert r1.hardware == (scene.robots[0], *r1.devices)
     assert r1.skills == tuple(sorted((NAVIGATE, PICK, PLACE), key=lambda s: s.name))
     assert r1.skill("pick") == PICK
     assert r1.skill("fly") is None
@@ -28,9 +28,12 @@ def test_agents_with_robot_devices_and_skills() -> None:
 
 def test_devices_are_found_through_nested_has_a() -> None:
     scene = kitting_scene(1, 1)
-    apply_ops(scene, [AddElement(type="Camera", label="wrist cam", relations=[Relation("Arm-1", "hasA", "$")])])
+    apply_ops(
+        scene,
+        [AddElement(type="Camera", label="wrist cam", relations=[Relation("Arm-1", "hasA", "$")])],
+    )
     (agent,) = agents_from_view(scene.view)
-    assert agent.devices == ("Arm-1", "Camera-1", "Gripper-1", "MobileBase-1")
+    assert agent.devices == ("Arm-1", "Camera-1", "Camera-2", "Gripper-1", "MobileBase-1")
 
 
 def test_availability_and_liveliness() -> None:
@@ -69,7 +72,10 @@ def test_unreadable_descriptions_are_reported_not_fatal() -> None:
 
 def test_decode_description() -> None:
     element = Element(
-        id="Skill-1", type="Skill", label="pick", properties={"description": msgspec.json.encode(PICK).decode()}
+        id="Skill-1",
+        type="Skill",
+        label="pick",
+        properties={"description": msgspec.json.encode(PICK).decode()},
     )
     assert decode_description(element) == PICK
     with pytest.raises(DiscoveryError, match="has no description"):

@@ -6,7 +6,14 @@ import msgspec
 import pytest
 
 from skill_agent.conditions import symbolic
-from skill_agent.protocol import AndCond, EmptyCond, NotCond, PropertyCond, RelationCond
+from skill_agent.protocol import (
+    AndCond,
+    Condition,
+    EmptyCond,
+    NotCond,
+    PropertyCond,
+    RelationCond,
+)
 from task_agent.errors import GoalParseError
 from task_agent.goals import (
     Goal,
@@ -72,9 +79,15 @@ def test_text_values(scene: KittingScene) -> None:
         ("contain(KitBox-1, Gear-33)", "unknown element 'Gear-33'"),
         ("contain(KitBox-1, Gear-33)", "did you mean 'Gear-3'"),
         ('contain(KitBox-1, "gear 1")', "did you mean 'gear-1'"),
-        ("contian(KitBox-1, Gear-1)", "unknown relation or property 'contian'; did you mean 'contain'"),
+        (
+            "contian(KitBox-1, Gear-1)",
+            "unknown relation or property 'contian'; did you mean 'contain'",
+        ),
         ("doorOpem(Microwave-1)", "did you mean 'doorOpen'"),
-        ("contain(KitBox-1)", "'contain' is a relation and takes 2 arguments (subject, object), got 1"),
+        (
+            "contain(KitBox-1)",
+            "'contain' is a relation and takes 2 arguments (subject, object), got 1",
+        ),
         ("heating(Microwave-1, Gear-1)", "takes 1 argument (element), got 2"),
         ("contain(Gear-1, KitBox-1)", "cannot relate Gear --contain--> KitBox"),
         ("doorOpen(Microwave-1) = 3", "property 'doorOpen' takes bool"),
@@ -113,7 +126,9 @@ def test_goal_structs_are_checked_and_labels_resolved(scene: KittingScene) -> No
         Goal(literals=(RelationGoal(predicate="contain", subject="kit-2", object="gear-4"),))
     )
     goal = check_goal(msgspec.json.decode(wire, type=Goal), scene.view)
-    assert goal.literals == (RelationGoal(predicate="contain", subject="KitBox-2", object="Gear-4"),)
+    assert goal.literals == (
+        RelationGoal(predicate="contain", subject="KitBox-2", object="Gear-4"),
+    )
     bad: list[GoalLiteral] = [PropertyGoal(element="Gear-1", property="contain", value=True)]
     with pytest.raises(GoalParseError, match="'contain' is a relation, not a property"):
         check_goal(bad, scene.view)
@@ -146,7 +161,7 @@ def test_goal_from_conditions(scene: KittingScene) -> None:
 
 
 def test_atoms_are_named_like_skill_conditions() -> None:
-    for cond, lit in [
+    pairs: list[tuple[Condition, GoalLiteral]] = [
         (
             PropertyCond(param="x", property="doorOpen", value=True),
             PropertyGoal(element="x", property="doorOpen", value=True),
@@ -159,5 +174,6 @@ def test_atoms_are_named_like_skill_conditions() -> None:
             RelationCond(subject="x", predicate="contain", object="y", holds=False),
             RelationGoal(predicate="contain", subject="x", object="y", holds=False),
         ),
-    ]:
+    ]
+    for cond, lit in pairs:
         assert symbolic(cond) == [literal_atom(lit)]

@@ -18,7 +18,7 @@ from task_agent import planner as planner_module
 from task_agent.discovery_model import agents_from_view
 from task_agent.domain import PlanningTask, build_task
 from task_agent.errors import PlannerTimeoutError, UnsolvableError
-from task_agent.goals import parse_goal
+from task_agent.goals import Goal, parse_goal
 from task_agent.planner import Engine, Plan, Planner, to_unified_planning, to_up_plan
 from tests.assets.planning import (
     NAVIGATE,
@@ -35,18 +35,23 @@ from tests.conftest import SlowSteps
 ENGINES: list[Engine] = ["kairos", "fast-downward"]
 
 
-def kitting_task(robots: int = 2, parts: int = 8, per_robot: int = 2) -> tuple[KittingScene, PlanningTask]:
+def kitting_task(
+    robots: int = 2, parts: int = 8, per_robot: int = 2
+) -> tuple[KittingScene, PlanningTask]:
     """Fill each robot's kit with ``per_robot`` parts, taken alternately from both stations."""
     scene = kitting_scene(robots, parts)
-    wanted = [f"contain({scene.kits[i % robots]}, {p})" for i, p in enumerate(scene.parts[: robots * per_robot])]
+    wanted = [
+        f"contain({scene.kits[i % robots]}, {p})"
+        for i, p in enumerate(scene.parts[: robots * per_robot])
+    ]
     goal = parse_goal(" and ".join(wanted), scene.view)
     return scene, build_task(agents_from_view(scene.view), scene.view, goal)
 
 
 def oven_task(*, can_open: bool) -> tuple[KittingScene, PlanningTask]:
-    skills = (NAVIGATE, PICK, PLACE, TAKE_OUT) + ((OPEN_DOOR,) if can_open else ())
-    scene = kitting_scene(2, 4, skills=skills)
-    _, gear = add_microwave(scene, door_open=False)
+    """A gear inside a closed microwave; with ``can_open`` its agent can open the door."""
+    scene = kitting_scene(2, 4, skills=(NAVIGATE, PICK, PLACE, TAKE_OUT))
+    _, gear = add_microwave(scene, door_open=False, skills=(OPEN_DOOR,) if can_open else ())
     goal = parse_goal(f"contain(KitBox-1, {gear}) and contain(KitBox-2, Gear-2)", scene.view)
     return scene, build_task(agents_from_view(scene.view), scene.view, goal)
 
@@ -75,7 +80,10 @@ def test_kitting_plan_is_valid_and_uses_both_robots(
     validate_with_unified_planning(task, plan)
     problem = to_unified_planning(task)  # a private environment: Kairos' validator works there
     with KairosValidator() as validator:
-        assert validator.validate(problem, to_up_plan(problem, plan.steps)).status == ValidationResultStatus.VALID
+        assert (
+            validator.validate(problem, to_up_plan(problem, plan.steps)).status
+            == ValidationResultStatus.VALID
+        )
     assert {s.agent for s in plan.steps} == {"r1", "r2"}
     for step in plan.steps:
         robot = scene.robots[int(step.agent[1:]) - 1]
@@ -112,8 +120,14 @@ def test_unsolvable_goal_names_the_unreachable_fact_and_why() -> None:
     error = info.value
     assert error.proven
     assert error.unreachable == ("contain(KitBox-1, Gear-5)",)
-    assert "contain(KitBox-1, Gear-5) is unreachable: place__r1 needs contain(Gripper-1, Gear-5)" in error.reason
-    assert "take_out__r1 needs doorOpen=true(?appliance), which no skill's post-condition makes true" in error.reason
+    assert (
+        "contain(KitBox-1, Gear-5) is unreachable: place__r1 needs contain(Gripper-1, Gear-5)"
+        in error.reason
+    )
+    assert (
+        "take_out__r1 needs doorOpen=true(?appliance), which no skill's post-condition makes true"
+        in error.reason
+    )
 
 
 def test_goal_nothing_can_achieve() -> None:
@@ -140,7 +154,9 @@ def test_fallback_to_the_full_task_when_compression_drops_too_much(
     _, task = kitting
     # Keep too little: the stations are gone, nobody can drive to the parts.
     monkeypatch.setattr(
-        planner_module, "relevant_objects", lambda t: {o for o in t.objects if not o.startswith("Station")}
+        planner_module,
+        "relevant_objects",
+        lambda t: {o for o in t.objects if not o.startswith("Station")},
     )
     plan = Planner().solve(task)
     assert plan.stats.fallback
@@ -157,7 +173,7 @@ def test_problem_kind_matches_unified_planning(kitting: tuple[KittingScene, Plan
     _, plain = kitting
     _, oven = oven_task(can_open=True)
     scene = kitting_scene(1, 1)
-    grab = msgspec.structs.replace(PICK, name="grab", pre=[])
+    grab = msgspec.structs.replace(PICK, name="grab", pre=[], hold=[])
     loose = build_task(
         agents_from_view(kitting_scene(1, 1, skills=(grab,)).view),
         scene.view,
@@ -191,14 +207,21 @@ def test_unknown_engine() -> None:
         Planner(engine="tamer")  # type: ignore[arg-type]
 
 
-@pytest.mark.anyio
-async def test_async_plan_runs_off_the_loop(blocking_detector: SlowSteps) -> None:
+@pytest.fixture
+def scene_and_goal() -> tuple[KittingScene, Goal]:
     scene = kitting_scene(2, 8)
-    goal = parse_goal("contain(KitBox-1, Gear-1) and contain(KitBox-2, Gear-2)", scene.view)
+    return scene, parse_goal("contain(KitBox-1, Gear-1) and contain(KitBox-2, Gear-2)", scene.view)
+
+
+@pytest.mark.anyio
+async def test_async_plan_runs_off_the_loop(
+    scene_and_goal: tuple[KittingScene, Goal], blocking_detector: SlowSteps
+) -> None:
+    scene, goal = scene_and_goal
+    agents = agents_from_view(scene.view)
     planner = Planner()
-    plan = await planner.plan(agents_from_view(scene.view), scene.view, goal)
-    again = await planner.plan(agents_from_view(scene.view), scene.view, goal)
+    plan = await planner.plan(agents, scene.view, goal)
+    again = await planner.plan(agents, scene.view, goal)
     assert plan.steps and len(again.steps) == len(plan.steps)
     assert not blocking_detector.reports
-    sync = planner.plan_sync(agents_from_view(scene.view), scene.view, goal)
-    assert len(sync.steps) == len(plan.steps)
+    assert len(planner.plan_sync(agents, scene.view, goal).steps) == len(plan.steps)

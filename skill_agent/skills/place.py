@@ -1,0 +1,333 @@
+"""``place`` (into a container the robot carries, e.g. its kit box), ``serve`` (onto a tray at
+the robot's location) and ``put_in`` (into an appliance through its open door).
+
+``execute`` first checks the gripper still holds the object, picks a free spot on the
+target's floor (:func:`~skill_agent.primitives.free_spot`, away from what the world model
+says is already there), computes where the tcp must go for the object's bottom to be ``drop``
+m above it (:func:`~skill_agent.primitives.release_pose`, from the grasp the object was
+picked with), approaches, releases (opening just wider than the object) and retreats. An arm
+that cannot reach all the way down (a kit box low behind its shoulder) releases where it
+stopped if the object is already below the target's rim, straight above the spot.
+
+``post_sense`` is the honest check, with the ground truth the sensors report:
+
+- the object was lost on the way (the arm reports it, or the gripper holds nothing before the
+  release): the run fails, "dropped"; the world model is corrected (the gripper no longer
+  holds it; if a sensor sees it, its pose and the container or surface it fell into);
+- after the release a sensor sees the object outside the target: the run fails likewise;
+- a sensor sees it inside: its pose is written, the prediction ``contain(target, object)`` is
+  committed. When no sensor sees the target's inside (e.g. a kit box on the robot's own deck
+  behind its camera) the release pose is trusted and the progress says so.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+from device_drivers.errors import DeviceError, GraspLostError, UnreachableError
+from device_drivers.interfaces import WorldPose
+from wm_store.client import WmClient
+from wm_store.protocol import Op
+from wm_store.reasoners.spatial import Transform
+from wm_store.vocab import Cls, Prop, Rel
+
+from ..errors import SkillFailure
+from ..primitives import (
+    NoGraspError,
+    approach,
+    extents,
+    footprint_radius,
+    free_spots,
+    plan_grasp,
+    release,
+    release_pose,
+    retreat,
+)
+from ..primitives.poses import Vec3, to_transform
+from ..protocol import ParamSpec, SkillDescription
+from ..skill import Skill, SkillContext
+from .manipulation import UP, arm_of, depth_inside, front_of, go_home, gripper_of, make_safe
+from .params import (
+    ARM,
+    GRIPPER,
+    LOCATION,
+    OBJECT,
+    PLATFORM,
+    ROBOT,
+    SENSOR,
+    at,
+    contains,
+    door_is,
+    empty,
+    not_full,
+    offline,
+)
+from .sensing import containing, lies_in, look, move_ops, observation_ops, sensors_of
+from .support import element_id, failure, float_param, geometry, tracked, wm_of, world_transform
+
+__all__ = ["Place", "PutIn", "Serve"]
+
+_DEVICES = [ROBOT, ARM, GRIPPER, SENSOR, PLATFORM]
+SPOTS_TRIED = 4
+"""Free spots tried, nearest the target's centre first, before the place fails."""
+RIM_SLACK = 0.01
+"""An arm stopped short may release when the object's bottom is at most this far above the
+target's rim (m), straight above the spot."""
+_TUNING = [
+    offline("drop", "float", 0.02, "height of the object's bottom above the floor at release, m"),
+    offline("approach", "float", 0.10, "pre-place distance back along the approach, m"),
+    offline("wall", "float", 0.008, "wall and floor thickness of the target, m"),
+]
+
+
+class Place(Skill):
+    """Put the held object into a container the robot carries."""
+
+    description = SkillDescription(
+        name="place",
+        skill_type="place",
+        doc="Put the held object down into a container the robot carries (its kit box).",
+        parameters=[
+            OBJECT,
+            ParamSpec(name="container", type=Cls.Container, doc="where it goes"),
+            *_DEVICES,
+            *_TUNING,
+        ],
+        pre=[contains("gripper", "object"), contains("robot", "container"), not_full("container")],
+        hold=[contains("gripper", "object")],
+        post=[contains("container", "object"), contains("gripper", "object", holds=False)],
+        duration=4.0,
+    )
+    success_probability = 0.95
+    target_param: ClassVar[str] = "container"
+
+    def __init__(self) -> None:
+        self.dropped = ""
+
+    def travel(self, ctx: SkillContext, goal: WorldPose) -> tuple[Vec3 | None, float, Vec3, float]:
+        """For a release at ``goal``: approach direction (None: down the tcp axis) and
+        distance (m), retreat direction and distance (m)."""
+        offset = float_param(ctx, "approach")
+        return None, offset, UP, offset
+
+    async def execute(self, ctx: SkillContext) -> None:
+        wm, arm, gripper = wm_of(ctx), arm_of(ctx), gripper_of(ctx)
+        obj = geometry(wm, element_id(ctx, "object"))
+        target_id = element_id(ctx, self.target_param)
+        target = geometry(wm, target_id)
+        if (await gripper.state()).holding != obj.label:
+            self.dropped = f"{gripper.name} no longer holds it before the place began"
+            return
+        box_pose, box_ext = target.require("place")
+        obj_pose, obj_ext = obj.require("place")
+        tcp_now = (await arm.state()).tcp
+        try:
+            grasp = plan_grasp(
+                obj_pose,
+                obj.size,
+                grasp_pose=obj.grasp_pose(),
+                grasp_width=obj.grasp_width(),
+                current=tcp_now,
+            )
+        except NoGraspError as exc:
+            raise SkillFailure(f"place: cannot tell how {obj.label} is held: {exc}") from exc
+        spots = free_spots(
+            box_pose,
+            box_ext,
+            footprint_radius(obj.size),
+            _occupied(wm, target_id, obj.element.id),
+            wall=float_param(ctx, "wall"),
+        )[:SPOTS_TRIED]
+        if not spots:
+            raise SkillFailure(f"place: no free spot for {obj.label} in {target.label}")
+        drop = float_param(ctx, "drop")
+        rim = box_pose.translation[2] + box_ext[2] / 2
+        try:
+            await go_home(ctx, arm)
+        except GraspLostError as exc:
+            self.dropped = str(exc)
+            return
+        except (DeviceError, ValueError) as exc:
+            raise failure("place", exc) from exc
+        why, goal = "", tcp_now
+        for k, spot in enumerate(spots):
+            goal = release_pose(
+                tcp_now, grasp.object_in_tcp, (spot[0], spot[1], spot[2] + drop), obj_ext[2]
+            )
+            try:
+                why = await self._bring(ctx, goal, grasp.object_in_tcp, obj_ext[2], rim)
+            except GraspLostError as exc:
+                self.dropped = str(exc)
+                return
+            if not why:
+                break
+            await ctx.progress(f"spot {k + 1} of {len(spots)} out of reach: {why}", step="approach")
+        else:
+            raise SkillFailure(f"place: no spot in {target.label} within reach: {why}")
+        _, _, back, distance = self.travel(ctx, goal)
+        try:
+            await ctx.progress(f"releasing {obj.label}", step="release", fraction=0.7)
+            await release(gripper)
+            await tracked(
+                ctx,
+                "retreating",
+                lambda cb: retreat(arm, distance, direction=back, progress=cb),
+                step="retreat",
+                start=0.8,
+            )
+        except (DeviceError, ValueError) as exc:  # released: post_sense judges the place
+            await ctx.progress(f"could not back off after the release: {exc}", step="retreat")
+            return
+        try:
+            await go_home(ctx, arm)
+        except (DeviceError, ValueError) as exc:
+            await ctx.progress(f"could not go home after the release: {exc}", step="home")
+
+    async def _bring(
+        self,
+        ctx: SkillContext,
+        goal: WorldPose,
+        object_in_tcp: Transform,
+        height: float,
+        rim: float,
+    ) -> str:
+        """Approach the release pose ``goal``; "" when the object may be released (there, or
+        where the arm stopped, if the object is already down at the rim, straight above the
+        spot), else why not. GraspLostError propagates."""
+        arm = arm_of(ctx)
+        inward, offset, _, _ = self.travel(ctx, goal)
+        try:
+            await tracked(
+                ctx,
+                f"bringing {wm_of(ctx).get_element(element_id(ctx, 'object')).label} down",
+                lambda cb: approach(arm, goal, offset, direction=inward, progress=cb),
+                step="approach",
+                end=0.7,
+            )
+            return ""
+        except UnreachableError as exc:  # the arm could not go all the way
+            tcp = (await arm.state()).tcp
+            bottom = to_transform(tcp).compose(object_in_tcp).translation[2] - height / 2
+            if bottom < rim + RIM_SLACK and math.hypot(tcp.x - goal.x, tcp.y - goal.y) < 0.01:
+                await ctx.progress(
+                    f"the arm stops short; releasing {bottom - rim:+.3f} m from the rim",
+                    step="release",
+                )
+                return ""
+            return str(exc)
+        except GraspLostError:
+            raise
+        except (DeviceError, ValueError) as exc:
+            raise failure("place", exc) from exc
+
+    async def post_sense(self, ctx: SkillContext) -> None:
+        wm, gripper = wm_of(ctx), gripper_of(ctx)
+        obj, target = element_id(ctx, "object"), element_id(ctx, self.target_param)
+        label = wm.get_element(obj).label
+        holding = (await gripper.state()).holding
+        if not self.dropped and holding == label:
+            raise SkillFailure(f"place: {gripper.name} still holds {label} after the release")
+        seen = await look(wm, wm.get_element(obj), sensors_of(ctx))
+        if not self.dropped and not seen:
+            await ctx.progress(f"{label} released; no sensor sees it: trusting the release pose")
+            return
+        height = (extents(wm.get_element(obj).properties.get(Prop.size)) or (0.0, 0.0, 0.0))[2]
+        inside = bool(seen) and lies_in(wm, target, seen[0].pose, height)
+        if not self.dropped and inside:
+            await wm.transact(observation_ops(obj, seen))
+            await ctx.progress(f"{label} seen in {wm.get_element(target).label}")
+            return
+        ops: list[Op] = observation_ops(obj, seen) if seen else []
+        where = containing(wm, seen[0].pose, exclude=[obj]) if seen else None
+        ops += move_ops(wm, obj, where)
+        await wm.transact(ops)
+        found = (
+            f"it lies in {where}"
+            if where
+            else ("it was not seen" if not seen else "it lies outside anything known")
+        )
+        why = (
+            f"dropped on the way ({self.dropped})"
+            if self.dropped
+            else "it did not land in the target"
+        )
+        raise SkillFailure(f"place failed: {label} {why}; {found}")
+
+    async def on_preempt(self, ctx: SkillContext) -> None:
+        await make_safe(ctx)
+
+
+def _occupied(wm: WmClient, container: str, moving: str) -> list[tuple[Vec3, float]]:
+    """Positions (world) and footprint radii of what the container holds already."""
+    found = []
+    for child in wm.get_children(container, Rel.contain):
+        where = world_transform(wm, child.id) if child.id != moving else None
+        if where is not None:
+            found.append((where.translation, footprint_radius(child.properties.get(Prop.size))))
+    return found
+
+
+class Serve(Place):
+    """Put the held object on a tray at the robot's location (FRIEND II: serve the meal)."""
+
+    description = SkillDescription(
+        name="serve",
+        skill_type="place",
+        doc="Put the held object down on a tray within reach (serve it).",
+        parameters=[
+            OBJECT,
+            ParamSpec(name="tray", type=Cls.Tray, doc="the tray"),
+            LOCATION,
+            *_DEVICES,
+            *_TUNING,
+        ],
+        pre=[
+            contains("gripper", "object"),
+            at("robot", "location"),
+            at("tray", "location"),
+            not_full("tray"),
+        ],
+        hold=[contains("gripper", "object")],
+        post=[contains("tray", "object"), contains("gripper", "object", holds=False)],
+        duration=4.0,
+    )
+    target_param = "tray"
+
+
+class PutIn(Place):
+    """Put the held object into an appliance through its open door."""
+
+    description = SkillDescription(
+        name="put_in",
+        skill_type="place",
+        doc="Put the held object into an empty appliance (a microwave) through its open door.",
+        parameters=[
+            OBJECT,
+            ParamSpec(name="appliance", type=Cls.Appliance, doc="where it goes"),
+            LOCATION,
+            *_DEVICES,
+            *[p for p in _TUNING if p.name != "wall"],
+            offline("wall", "float", 0.02, "wall and floor thickness of the appliance, m"),
+        ],
+        pre=[
+            contains("gripper", "object"),
+            door_is("appliance", True),
+            empty("appliance"),
+            at("robot", "location"),
+            at("appliance", "location"),
+        ],
+        hold=[contains("gripper", "object"), door_is("appliance", True)],
+        post=[contains("appliance", "object"), contains("gripper", "object", holds=False)],
+        duration=5.0,
+    )
+    target_param = "appliance"
+
+    def travel(self, ctx: SkillContext, goal: WorldPose) -> tuple[Vec3 | None, float, Vec3, float]:
+        """In through the front from ``approach`` m back; out until ``approach`` m clear of
+        the front (a joint motion home from inside the cavity would sweep the hand through
+        its walls)."""
+        wm, appliance = wm_of(ctx), element_id(ctx, "appliance")
+        front, inside = front_of(wm, appliance), depth_inside(wm, appliance, goal)
+        offset = float_param(ctx, "approach")
+        return (-front[0], -front[1], 0.0), offset, front, inside + offset

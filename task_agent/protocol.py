@@ -1,0 +1,341 @@
+"""Wire schema of the task layer: task service requests, task events, hand-written task files.
+
+Key space (prefix ``skimesh/<mesh>``):
+
+- ``tasks/rpc``            queryable: one :data:`TaskRequest` -> one :data:`TaskReply`
+- ``tasks/<task>/events``  publication: :data:`TaskEvent`, from ``TaskStarted`` to one
+  ``TaskFinished``
+- ``operator/rpc``         queryable of the operator agent's pending requests (semi-autonomy)
+
+A task is either a **goal** (world-model facts, planned by the task agent) or a **task file**
+(hand-written sequence / parallel blocks of skill calls, verified before it runs). Unions are
+tagged (``request``, ``reply``, ``event``, ``block``); messages only gain fields with defaults.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, TypeAlias
+
+import msgspec
+from msgspec import Meta, Struct
+
+from wm_store.protocol import Value
+
+from .goals import Goal
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "AbortTask",
+    "Call",
+    "ErrorReply",
+    "ListTasks",
+    "OkReply",
+    "Parallel",
+    "Planned",
+    "PlannedStep",
+    "Replanning",
+    "Sequence",
+    "StepFinished",
+    "StepProgress",
+    "StepStarted",
+    "SubmitFile",
+    "SubmitGoal",
+    "TaskAccepted",
+    "TaskBlock",
+    "TaskEvent",
+    "TaskFile",
+    "TaskFinished",
+    "TaskInfo",
+    "TaskOptions",
+    "TaskOutcome",
+    "TaskReply",
+    "TaskRequest",
+    "TaskStarted",
+    "TaskStatus",
+    "TasksReply",
+    "VerifyFile",
+    "VerifyProblem",
+    "VerifyReply",
+    "decode_event",
+    "decode_reply",
+    "decode_request",
+    "encode",
+]
+
+SCHEMA_VERSION = 1
+
+# --------------------------------------------------------------------------- task files
+# A TOML file such as:
+#
+#   name = "kit two gears"
+#   [root]
+#   block = "sequence"
+#   [[root.children]]
+#   block = "call"
+#   id = "pick1"
+#   agent = "r1-agent"
+#   skill = "pick"
+#   params = { object = "Gear-1" }
+#   [[root.children]]
+#   block = "call"
+#   agent = "r1-agent"
+#   skill = "place"
+#   params = { object = "@pick1.object", container = "KitBox-1" }
+#
+# A parameter value "@<step id>.<param>" is data flow: the value that step ran with (including
+# inferred ones). Element parameters take element ids or "label:<label>".
+
+
+class Call(Struct, tag="call", tag_field="block", frozen=True, kw_only=True):
+    """One skill run on one agent. ``agent`` may be empty: any agent offering ``skill``."""
+
+    skill: str
+    agent: str = ""
+    params: dict[str, Value] = {}
+    id: str = ""
+    fallback_operator: bool = False
+    """If the skill fails, ask the operator to do it (semi-autonomy)."""
+
+
+class Sequence(Struct, tag="sequence", tag_field="block", frozen=True, kw_only=True):
+    children: list[TaskBlock]
+    id: str = ""
+
+
+class Parallel(Struct, tag="parallel", tag_field="block", frozen=True, kw_only=True):
+    """Children run at the same time (FRIEND II's "set of operations in parallel")."""
+
+    children: list[TaskBlock]
+    id: str = ""
+
+
+TaskBlock: TypeAlias = Call | Sequence | Parallel
+
+
+class TaskFile(Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    name: str = ""
+    root: TaskBlock
+
+
+class VerifyProblem(Struct, frozen=True, kw_only=True):
+    """One reason a task file would fail: where (``path`` of block ids / indices), what kind,
+    and why."""
+
+    path: str
+    kind: Literal["dataflow", "type", "resource", "precondition", "unknown", "structure"]
+    message: str
+
+
+# --------------------------------------------------------------------------- requests
+
+
+class TaskOptions(Struct, frozen=True, kw_only=True):
+    engine: Literal["kairos", "fast-downward"] = "kairos"
+    planner_timeout: Annotated[float, Meta(gt=0)] = 30.0
+    max_replans: Annotated[int, Meta(ge=0)] = 3
+    simulate: bool = False
+    """Run every skill in simulated-outcome mode."""
+    operator_fallback: bool = False
+    """When a skill fails, ask the operator before replanning."""
+
+
+class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """Plan and run towards ``goal`` (text like ``contain(KitBox-1, Gear-3) and ...``, or a
+    :class:`~task_agent.goals.Goal`)."""
+
+    goal: str | Goal
+    options: TaskOptions = TaskOptions()
+    task_id: str = ""
+    author: str = ""
+
+
+class SubmitFile(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """Verify, then run a hand-written task (TOML text of a :class:`TaskFile`)."""
+
+    text: str
+    options: TaskOptions = TaskOptions()
+    task_id: str = ""
+    author: str = ""
+
+
+class VerifyFile(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    text: str
+
+
+class TaskStatus(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    task_id: str
+
+
+class ListTasks(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    active_only: bool = False
+
+
+class AbortTask(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    task_id: str
+    reason: str = ""
+
+
+TaskRequest: TypeAlias = SubmitGoal | SubmitFile | VerifyFile | TaskStatus | ListTasks | AbortTask
+
+# --------------------------------------------------------------------------- events
+
+TaskOutcome = Literal["running", "succeeded", "failed", "unsolvable", "aborted"]
+
+
+class PlannedStep(Struct, frozen=True, kw_only=True):
+    index: int
+    agent: str
+    skill: str
+    params: dict[str, Value]
+    after: list[int] = []
+    """Indices of the steps that must finish first (the partial order)."""
+    start: float = 0.0
+    finish: float = 0.0
+    """Estimated seconds from the plan's start."""
+
+
+class TaskStarted(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    goal: str = ""
+    name: str = ""
+
+
+class Planned(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    steps: list[PlannedStep]
+    attempt: int = 0
+    planner: str = ""
+    plan_seconds: float = 0.0
+    makespan: float = 0.0
+    sequential: float = 0.0
+
+
+class StepStarted(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    step: int
+    agent: str
+    skill: str
+    run_id: str
+    params: dict[str, Value] = {}
+
+
+class StepProgress(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    step: int
+    agent: str
+    state: str
+    message: str = ""
+    fraction: float = -1.0
+
+
+class StepFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    step: int
+    agent: str
+    skill: str
+    success: bool
+    reason: str
+    message: str = ""
+    by_operator: bool = False
+
+
+class Replanning(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    attempt: int
+    reason: str
+    """Why: the failed step's reason, or the agent that vanished."""
+
+
+class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    task_id: str
+    seq: int
+    stamp: float
+    outcome: TaskOutcome
+    message: str = ""
+    steps_run: int = 0
+    replans: int = 0
+    duration: float = 0.0
+
+
+TaskEvent: TypeAlias = (
+    TaskStarted | Planned | StepStarted | StepProgress | StepFinished | Replanning | TaskFinished
+)
+
+# --------------------------------------------------------------------------- replies
+
+
+class TaskInfo(Struct, frozen=True, kw_only=True):
+    task_id: str
+    outcome: TaskOutcome
+    goal: str = ""
+    name: str = ""
+    started_at: float = 0.0
+    finished_at: float = 0.0
+    replans: int = 0
+    steps_run: int = 0
+    message: str = ""
+
+
+class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    task_id: str
+    schema_version: int = SCHEMA_VERSION
+
+
+class TasksReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    tasks: list[TaskInfo]
+    schema_version: int = SCHEMA_VERSION
+
+
+class VerifyReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    ok: bool
+    problems: list[VerifyProblem] = []
+    schema_version: int = SCHEMA_VERSION
+
+
+class OkReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    message: str = ""
+    schema_version: int = SCHEMA_VERSION
+
+
+class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    code: str
+    message: str
+    schema_version: int = SCHEMA_VERSION
+
+
+TaskReply: TypeAlias = TaskAccepted | TasksReply | VerifyReply | OkReply | ErrorReply
+
+# --------------------------------------------------------------------------- codecs
+
+_encoder = msgspec.msgpack.Encoder()
+_request_decoder = msgspec.msgpack.Decoder(TaskRequest)
+_reply_decoder = msgspec.msgpack.Decoder(TaskReply)
+_event_decoder = msgspec.msgpack.Decoder(TaskEvent)
+
+
+def encode(message: Any) -> bytes:
+    return _encoder.encode(message)
+
+
+def decode_request(data: bytes) -> TaskRequest:
+    return _request_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+
+
+def decode_reply(data: bytes) -> TaskReply:
+    return _reply_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+
+
+def decode_event(data: bytes) -> TaskEvent:
+    return _event_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped

@@ -1,0 +1,128 @@
+"""The device wire schema: round trips, tolerant decoding, and errors that keep their class."""
+
+from __future__ import annotations
+
+import importlib
+
+import msgspec
+import pytest
+
+from device_drivers import errors
+from device_drivers import protocol as p
+from device_drivers.interfaces import ArmState, GripperState, WorldPose
+from device_drivers.robot_spec import Pose2D
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        p.GetState(),
+        p.Stop(),
+        p.Describe(),
+        p.MoveJoints({"elbow": 1.0}, duration=2.0),
+        p.MoveTcp(WorldPose(1, 2, 3), straight=False, speed=0.1, whole_body=True),
+        p.OpenGripper(0.05),
+        p.CloseGripper(15.0),
+        p.GoTo(Pose2D(1.0, 2.0, 0.5), speed=0.3),
+        p.Detect(),
+        p.SetDoor(True),
+        p.Heat(30.0, power=0.5),
+        p.Press("start"),
+    ],
+)
+def test_requests_round_trip(command: p.Command) -> None:
+    request = p.Request(command=command, progress_key="x")
+    assert p.decode_request(p.encode(request)) == request
+
+
+def test_replies_round_trip() -> None:
+    arm = p.ArmStateReply(ArmState(joints={"elbow": 1.0}, tcp=WorldPose(0, 0, 1)))
+    closed = p.Closed(GripperState(opening=0.05, holding="Gear-1", pads_in_contact=2))
+    for reply in (arm, closed, p.Done(), p.DeviceInfo("arm", "r1-arm", "r1", "arm")):
+        assert p.decode_reply(p.encode(reply)) == reply
+
+
+def test_unknown_fields_are_tolerated_on_the_wire() -> None:
+    raw = msgspec.msgpack.encode({"command": {"cmd": "stop", "future": 1}, "extra": True})
+    assert p.decode_request(raw).command == p.Stop()
+
+
+def test_bad_requests_become_command_errors() -> None:
+    with pytest.raises(msgspec.ValidationError) as info:
+        p.decode_request(msgspec.msgpack.encode({"command": {"cmd": "fly"}}))
+    reply = p.error_reply(info.value)
+    assert reply.code == "CommandError" and "bad request" in reply.message
+    rebuilt = p.error_from_reply(p.encode(reply))
+    assert isinstance(rebuilt, errors.CommandError)
+
+
+@pytest.mark.parametrize(
+    "exc",
+    [
+        errors.MotionTimeoutError("r1-arm: elbow is 0.1 rad away"),
+        errors.GraspLostError("r1-gripper lost Gear-1"),
+        errors.CollisionError("blocked by Shelf-1"),
+        errors.DeviceBusyError("busy"),
+        errors.MotionStoppedError("stopped"),
+    ],
+)
+def test_device_errors_keep_their_class(exc: errors.DeviceError) -> None:
+    rebuilt = p.error_from_reply(p.encode(p.error_reply(exc)))
+    assert type(rebuilt) is type(exc)
+    assert str(rebuilt) == str(exc)
+
+
+def test_unreachable_error_keeps_its_attributes() -> None:
+    exc = errors.UnreachableError(
+        position_error=0.2,
+        orientation_error=0.1,
+        iterations=30,
+        solver="placo",
+        joints={"r1/elbow": 1.0},
+        whole_body=False,
+    )
+    rebuilt = p.error_from_reply(p.encode(p.error_reply(exc)))
+    assert isinstance(rebuilt, errors.UnreachableError)
+    assert rebuilt.position_error == 0.2 and rebuilt.joints == {"r1/elbow": 1.0}
+    assert str(rebuilt) == str(exc)
+
+
+def test_foreign_errors_and_plain_text() -> None:
+    reply = p.error_reply(RuntimeError("boom"))
+    assert reply.code == "DeviceError" and "RuntimeError: boom" in reply.message
+    text = p.error_from_reply(b"Cancelled: the server stopped before answering")
+    assert isinstance(text, errors.DeviceUnavailableError)
+    unknown = p.error_from_reply(p.encode(p.ErrorReply(code="NoSuchError", message="?")))
+    assert type(unknown) is errors.DeviceError
+
+
+NEW_MODULES = [
+    "device_drivers.appliance_control",
+    "device_drivers.arm_control",
+    "device_drivers.base_control",
+    "device_drivers.camera_images",
+    "device_drivers.control",
+    "device_drivers.drivers",
+    "device_drivers.grasp",
+    "device_drivers.gripper_control",
+    "device_drivers.motion_math",
+    "device_drivers.placement",
+    "device_drivers.plant",
+    "device_drivers.protocol",
+    "device_drivers.recorder",
+    "device_drivers.remote",
+    "device_drivers.remote_client",
+    "device_drivers.scenario",
+    "device_drivers.scenario_load",
+    "device_drivers.scene_facts",
+    "device_drivers.scene_model",
+    "device_drivers.sensing",
+    "device_drivers.tcp_tracker",
+    "device_drivers.world",
+]
+
+
+@pytest.mark.parametrize("name", NEW_MODULES)
+def test_public_names_exist(name: str) -> None:
+    module = importlib.import_module(name)
+    assert [n for n in module.__all__ if not hasattr(module, n)] == []

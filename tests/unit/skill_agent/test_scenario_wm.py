@@ -1,0 +1,146 @@
+"""A scenario becomes the initial world-model scene in one transaction: elements by scenario
+label and class, the spatial tree, centre poses and sizes, devices, locations (``at``), prior
+knowledge (home postures, door geometry, side grasps), and re-use of elements already there."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from pathlib import Path
+
+import anyio
+import pytest
+
+from device_drivers.placement import resolve_placements
+from device_drivers.scenario_load import load_scenario
+from skill_agent.scenario_wm import HOME_6, HOME_7, scenario_ops
+from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store.protocol import AddElement, Pose, SizeCuboid, SizeCylinder
+from wm_store.registration import DeviceSpec, RobotRegistration
+from wm_store.vocab import Cls, Prop, Rel
+
+pytestmark = pytest.mark.anyio
+
+SCENARIOS = Path(__file__).resolve().parents[3] / "configs" / "scenarios"
+
+
+@pytest.fixture
+async def wm() -> AsyncIterator[WmClient]:
+    ontology = Ontology.default()
+    store = await WmStore.open(ontology)
+    async with anyio.create_task_group() as tg:
+        await tg.start(store.run)
+        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
+            yield client
+        tg.cancel_scope.cancel()
+
+
+async def load(wm: WmClient, name: str) -> dict[str, str]:
+    reply = await wm.transact(scenario_ops(load_scenario(SCENARIOS / name / "scenario.toml")))
+    return {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
+
+
+def label_of(wm: WmClient, element: str) -> str:
+    return wm.get_element(element).label
+
+
+async def test_every_scenario_label_becomes_one_element(wm: WmClient) -> None:
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    ids = await load(wm, "kitting")
+    for label in scenario.labels:
+        assert label in ids
+        assert [e.id for e in wm.resolve_element(label=label)] == [ids[label]]
+    assert wm.get_element(ids["Gear-1"]).type == Cls.Gear
+    assert wm.get_element(ids["Station-1"]).type == Cls.Station
+
+
+async def test_the_kitting_tree(wm: WmClient) -> None:
+    ids = await load(wm, "kitting")
+
+    def parent(label: str) -> str:
+        p = wm.get_parent(ids[label])
+        return p.label if p is not None else ""
+
+    assert parent("Gear-1") == "PartBox-1"
+    assert parent("PartBox-1") == "Shelf-1"
+    assert parent("Shelf-1") == "Station-1"
+    assert parent("KitBox-1") == "r1"
+    assert {label_of(wm, r.object) for r in wm.query_relation(ids["r1"], Rel.hasA)} == {
+        "r1-arm",
+        "r1-gripper",
+        "r1-base",
+        "r1-camera",
+    }
+    at = {
+        (label_of(wm, r.subject), label_of(wm, r.object))
+        for r in wm.query_relation(predicate=Rel.at)
+    }
+    assert (
+        ("r1", "r1-home") in at
+        and ("PartBox-3", "Station-2") in at
+        and ("Shelf-2", "Station-2") in at
+    )
+    assert not any(s.startswith(("KitBox", "Gear")) for s, _ in at)
+
+
+async def test_poses_are_world_centres_and_sizes_are_set(wm: WmClient) -> None:
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    placed = resolve_placements(scenario)
+    ids = await load(wm, "kitting")
+    gear = wm.get_element(ids["Gear-1"])
+    pose, size = gear.properties[Prop.pose], gear.properties[Prop.size]
+    assert isinstance(pose, Pose) and isinstance(size, SizeCylinder)
+    bottom = placed["Gear-1"]
+    assert (pose.position.x, pose.position.y) == pytest.approx((bottom.x, bottom.y))
+    assert pose.position.z == pytest.approx(bottom.z + size.height / 2)
+    assert wm.spatial.is_inside(ids["Gear-1"], ids["PartBox-1"])
+    assert wm.spatial.is_inside(ids["KitBox-1"], ids["KitBox-1"])
+    kit = wm.get_element(ids["KitBox-1"]).properties[Prop.size]
+    assert kit == SizeCuboid(x=0.24, y=0.30, z=0.07)
+    station = wm.spatial.world_pose(ids["Station-1"]).position
+    assert (station.x, station.y) == pytest.approx((0.55, -1.0))
+
+
+async def test_arms_carry_their_home_posture(wm: WmClient) -> None:
+    ids = await load(wm, "kitting")
+    assert wm.get_element(ids["r1-arm"]).properties[Prop.jointPositions] == list(HOME_6)
+    ids = await load(wm, "meal")
+    assert wm.get_element(ids["friend-arm"]).properties[Prop.jointPositions] == list(HOME_7)
+
+
+async def test_the_meal_scene(wm: WmClient) -> None:
+    ids = await load(wm, "meal")
+    oven = wm.get_element(ids["Microwave-1"])
+    assert oven.properties[Prop.doorOpen] is False and oven.properties[Prop.heating] is False
+    assert oven.properties[Prop.heatingPower] == 800.0
+    door = wm.get_element(ids["Microwave-1-door"])
+    assert door.type == Cls.MicrowaveDoor
+    assert wm.get_parent(door.id).id == oven.id  # type: ignore[union-attr]
+    # the door panel stands in front of the cavity (the oven faces -x)
+    front = wm.spatial.world_pose(door.id).position.x
+    assert front < wm.spatial.world_pose(oven.id).position.x - 0.18
+    assert wm.get_element(ids["Worktop-1"]).type == Cls.SmartPlatform
+    assert wm.get_parent(ids["MealBox-1"]).id == ids["Worktop-1"]  # type: ignore[union-attr]
+    assert Prop.graspPose in wm.get_element(ids["MealBox-1"]).properties  # closed: side grasp
+    home = ids["friend-home"]
+    reachable = {label_of(wm, r.subject) for r in wm.query_relation(predicate=Rel.at, obj=home)}
+    assert reachable == {"friend", "Worktop-1", "Table-1", "Tray-1", "Microwave-1"}
+
+
+async def test_elements_already_there_are_reused(wm: WmClient) -> None:
+    await wm.register_robot(
+        RobotRegistration(
+            agent="r1",
+            robot_type=Cls.MobileManipulator,
+            robot_label="r1",
+            devices=[DeviceSpec(type=Cls.Gripper, label="r1-gripper")],
+        )
+    )
+    existing = {e.label: e.id for e in wm.resolve_element(type=Cls.PhysicalObject)}
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    ops = scenario_ops(scenario, existing)
+    added = {op.label for op in ops if isinstance(op, AddElement)}
+    assert "r1" not in added and "r1-gripper" not in added and "r1-arm" in added
+    await wm.transact(ops)
+    [robot] = wm.resolve_element(type=Cls.Robot, label="r1")
+    assert isinstance(robot.properties[Prop.pose], Pose)
+    assert wm.get_parent(wm.resolve_element(label="KitBox-1")[0].id).id == robot.id  # type: ignore[union-attr]
