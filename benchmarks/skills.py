@@ -212,6 +212,7 @@ async def measured_phases(endpoint: str, mesh_name: str, plan: Plan) -> dict[str
             return summarize(times, 1e-3), {k: summarize(v, 1e6) for k, v in parts.items()}
 
         async with AgentClient(mesh, AGENT) as shared:
+            out["call_us"] = await timed_calls(shared, plan.warmup, plan.runs)
             out["run_us"], out["breakdown_us"] = await timed_runs(shared, plan.runs)
             out["runs_per_s_1"] = await throughput(shared, 1, plan.throughput_seconds)
             out[f"runs_per_s_{CALLERS}"] = await throughput(
@@ -221,6 +222,20 @@ async def measured_phases(endpoint: str, mesh_name: str, plan: Plan) -> dict[str
             AgentClient(mesh, AGENT), plan.per_run_subscription_runs
         )
     return out
+
+
+async def timed_calls(client: AgentClient, warmup: int, count: int) -> Stats:
+    """``AgentClient.call``: start -> result in one request (``StartRun(wait=True)``)."""
+    times: list[int] = []
+    for i in range(warmup + count):
+        start = time.perf_counter_ns()
+        result = await client.call("noop")
+        elapsed = time.perf_counter_ns() - start
+        if not result.success:
+            raise RuntimeError(f"noop call failed: {result.message}")
+        if i >= warmup:
+            times.append(elapsed)
+    return summarize(times, 1e-3)
 
 
 async def throughput(client: AgentClient, callers: int, seconds: float) -> float:
@@ -265,6 +280,22 @@ def make_rows(d: dict[str, Any]) -> list[Row]:
             baseline_value=raw.p50,
             target="<= 3x raw get",
             met=run.p50 <= 3 * raw.p50,
+        ),
+        Row(
+            figure="no-op skill call p50 (StartRun wait=True)",
+            value=d["call_us"].p50,
+            unit="us",
+            baseline="raw get p50",
+            baseline_value=raw.p50,
+            target="<= 3x raw get",
+            met=d["call_us"].p50 <= 3 * raw.p50,
+        ),
+        Row(
+            figure="no-op skill call p99",
+            value=d["call_us"].p99,
+            unit="us",
+            baseline="raw get p99",
+            baseline_value=raw.p99,
         ),
         Row(
             figure="no-op skill run p99",

@@ -51,6 +51,7 @@ from .protocol import (
     Reload,
     ResumeRun,
     RunEvent,
+    RunFinished,
     RunInfo,
     RunResult,
     RunsReply,
@@ -271,6 +272,48 @@ class AgentClient:
             author=author,
         )
         return await self._expect(request, RunStarted, request_timeout)
+
+    async def call(
+        self,
+        skill: str,
+        params: Mapping[str, Value] | None = None,
+        *,
+        timeout: float = 30.0,
+        queue: bool = False,
+        simulate: bool = False,
+        author: str = "",
+    ) -> RunResult:
+        """Run a short skill in ONE round trip: the agent answers with the final result.
+
+        For skills that finish within ``timeout`` seconds (no progress stream is watched; use
+        :meth:`run` for long skills). If no answer comes in time, or the caller is cancelled,
+        the run is stopped on the agent before this raises.
+
+        Raises:
+            SkillError subclasses: the agent refused the start. TimeoutError: no result in time.
+        """
+        run_id = new_run_id()
+        request = StartRun(
+            skill=skill,
+            params=dict(params or {}),
+            queue=queue,
+            run_id=run_id,
+            timeout=timeout,
+            simulate=simulate,
+            author=author,
+            wait=True,
+        )
+        try:
+            reply = await self._expect(request, RunFinished, timeout + 1.0)
+        except AgentTransportError as exc:
+            await self._stop_quietly(run_id)
+            raise TimeoutError(f"{skill} on {self.agent!r}: no result in {timeout} s") from exc
+        except SkillError:
+            raise  # refused: nothing runs
+        except BaseException:  # cancelled: the run must not go on alone
+            await self._stop_quietly(run_id)
+            raise
+        return reply.result
 
     async def stop(self, run_id: str, *, timeout: float | None = None) -> RunResult:
         """Stop a run; returns its result once it is preempted (safe state reached). The

@@ -50,6 +50,7 @@ __all__ = [
     "ResultReason",
     "ResumeRun",
     "RunEvent",
+    "RunFinished",
     "RunInfo",
     "RunResult",
     "RunStarted",
@@ -302,6 +303,10 @@ class StartRun(Struct, tag=True, tag_field="request", frozen=True, kw_only=True)
     timeout: float | None = None
     simulate: bool = False
     author: str = ""
+    wait: bool = False
+    """Answer with the run's final result (:class:`RunFinished`) instead of
+    :class:`RunStarted`: one round trip for a short skill. The request's time-out must cover
+    the whole run; progress is still published."""
 
 
 class StopRun(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
@@ -349,6 +354,14 @@ class RunStarted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True)
     schema_version: int = SCHEMA_VERSION
 
 
+class RunFinished(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    """The answer to ``StartRun(wait=True)``: the run's final result."""
+
+    result: RunResult
+    inferred: dict[str, str] = {}
+    schema_version: int = SCHEMA_VERSION
+
+
 class RunsReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
     runs: list[RunInfo]
     schema_version: int = SCHEMA_VERSION
@@ -367,7 +380,7 @@ class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True)
     schema_version: int = SCHEMA_VERSION
 
 
-AgentReply: TypeAlias = SkillsReply | RunStarted | RunsReply | OkReply | ErrorReply
+AgentReply: TypeAlias = SkillsReply | RunStarted | RunFinished | RunsReply | OkReply | ErrorReply
 
 # --------------------------------------------------------------------------- codecs
 

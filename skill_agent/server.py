@@ -59,6 +59,7 @@ from .protocol import (
     Reload,
     ResumeRun,
     RunEvent,
+    RunFinished,
     RunInfo,
     RunResult,
     RunsReply,
@@ -132,7 +133,11 @@ class AgentService:
             case StartRun(run_id=run_id):
                 if run_id:
                     check_name(run_id, "run id")
-                return await core.start(request)
+                started = await core.start(request)
+                if not request.wait:
+                    return started
+                result = await core.wait(started.run_id)
+                return RunFinished(result=result, inferred=started.inferred)
             case StopRun(run_id=run_id):
                 result = await core.stop(run_id)
                 try:

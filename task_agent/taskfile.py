@@ -122,7 +122,9 @@ def _blocks(block: TaskBlock, path: str, trail: tuple[Step, ...]) -> Iterator[Bl
     yield BlockSite(path, block, trail, 0)
     if isinstance(block, Call):
         return
-    kind: Literal["sequence", "parallel"] = "sequence" if isinstance(block, Sequence) else "parallel"
+    kind: Literal["sequence", "parallel"] = (
+        "sequence" if isinstance(block, Sequence) else "parallel"
+    )
     for i, child in enumerate(block.children):
         yield from _blocks(child, f"{path}.{i}", (*trail, (kind, i)))
 
@@ -223,7 +225,9 @@ def _tokens(path: str) -> tuple[str | int, ...]:
     return tuple(int(i) if i else k for k, i in _TOKEN.findall(path))
 
 
-def _unknown_keys(raw: Any, path: tuple[str | int, ...]) -> Iterator[tuple[str, tuple[str | int, ...]]]:
+def _unknown_keys(
+    raw: Any, path: tuple[str | int, ...]
+) -> Iterator[tuple[str, tuple[str | int, ...]]]:
     if not isinstance(raw, dict):
         return
     allowed = _FIELDS.get(str(raw.get("block")), frozenset())

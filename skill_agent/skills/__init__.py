@@ -13,8 +13,8 @@ module             skills (name: class)                             used by
 ``navigate``       navigate: :class:`Navigate`                      mobile robots
 ``locate``         locate: :class:`Locate`                          robots with a sensor
 ``pick``           pick: :class:`Pick`, take_out: :class:`TakeOut`  arm robots
-``place``          place: :class:`Place`, serve: :class:`Serve`,    arm robots
-                   put_in: :class:`PutIn`
+``place``          place: :class:`Place`                            arm robots
+``serve``          serve: :class:`Serve`, put_in: :class:`PutIn`    arm robots
 ``doors``          open_door / close_door: :class:`ArmOpenDoor`,    arm robots (unpowered doors)
                    :class:`ArmCloseDoor`
 ``appliance``      open_door / close_door / heat:                   a smart appliance's agent
@@ -38,8 +38,8 @@ from .navigate import Navigate as Navigate
 from .pick import Pick as Pick
 from .pick import TakeOut as TakeOut
 from .place import Place as Place
-from .place import PutIn as PutIn
-from .place import Serve as Serve
+from .serve import PutIn as PutIn
+from .serve import Serve as Serve
 
 __all__ = [
     "ALL_SKILLS",

@@ -1,5 +1,6 @@
-"""``place`` (into a container the robot carries, e.g. its kit box), ``serve`` (onto a tray at
-the robot's location) and ``put_in`` (into an appliance through its open door).
+"""``place``: put the held object into a container the robot carries (e.g. its kit box). Its
+variants ``serve`` (onto a tray) and ``put_in`` (into an appliance) are in
+:mod:`skill_agent.skills.serve`.
 
 ``execute`` first checks the gripper still holds the object, picks a free spot on the
 target's floor (:func:`~skill_agent.primitives.free_spot`, away from what the world model
@@ -47,34 +48,30 @@ from ..primitives import (
 from ..primitives.poses import Vec3, to_transform
 from ..protocol import ParamSpec, SkillDescription
 from ..skill import Skill, SkillContext
-from .manipulation import UP, arm_of, depth_inside, front_of, go_home, gripper_of, make_safe
+from .manipulation import UP, arm_of, go_home, gripper_of, make_safe
 from .params import (
     ARM,
     GRIPPER,
-    LOCATION,
     OBJECT,
     PLATFORM,
     ROBOT,
     SENSOR,
-    at,
     contains,
-    door_is,
-    empty,
     not_full,
     offline,
 )
 from .sensing import containing, lies_in, look, move_ops, observation_ops, sensors_of
 from .support import element_id, failure, float_param, geometry, tracked, wm_of, world_transform
 
-__all__ = ["Place", "PutIn", "Serve"]
+__all__ = ["DEVICES", "RIM_SLACK", "SPOTS_TRIED", "TUNING", "Place"]
 
-_DEVICES = [ROBOT, ARM, GRIPPER, SENSOR, PLATFORM]
+DEVICES = [ROBOT, ARM, GRIPPER, SENSOR, PLATFORM]
 SPOTS_TRIED = 4
 """Free spots tried, nearest the target's centre first, before the place fails."""
 RIM_SLACK = 0.01
 """An arm stopped short may release when the object's bottom is at most this far above the
 target's rim (m), straight above the spot."""
-_TUNING = [
+TUNING = [
     offline("drop", "float", 0.02, "height of the object's bottom above the floor at release, m"),
     offline("approach", "float", 0.10, "pre-place distance back along the approach, m"),
     offline("wall", "float", 0.008, "wall and floor thickness of the target, m"),
@@ -91,8 +88,8 @@ class Place(Skill):
         parameters=[
             OBJECT,
             ParamSpec(name="container", type=Cls.Container, doc="where it goes"),
-            *_DEVICES,
-            *_TUNING,
+            *DEVICES,
+            *TUNING,
         ],
         pre=[contains("gripper", "object"), contains("robot", "container"), not_full("container")],
         hold=[contains("gripper", "object")],
@@ -266,68 +263,3 @@ def _occupied(wm: WmClient, container: str, moving: str) -> list[tuple[Vec3, flo
         if where is not None:
             found.append((where.translation, footprint_radius(child.properties.get(Prop.size))))
     return found
-
-
-class Serve(Place):
-    """Put the held object on a tray at the robot's location (FRIEND II: serve the meal)."""
-
-    description = SkillDescription(
-        name="serve",
-        skill_type="place",
-        doc="Put the held object down on a tray within reach (serve it).",
-        parameters=[
-            OBJECT,
-            ParamSpec(name="tray", type=Cls.Tray, doc="the tray"),
-            LOCATION,
-            *_DEVICES,
-            *_TUNING,
-        ],
-        pre=[
-            contains("gripper", "object"),
-            at("robot", "location"),
-            at("tray", "location"),
-            not_full("tray"),
-        ],
-        hold=[contains("gripper", "object")],
-        post=[contains("tray", "object"), contains("gripper", "object", holds=False)],
-        duration=4.0,
-    )
-    target_param = "tray"
-
-
-class PutIn(Place):
-    """Put the held object into an appliance through its open door."""
-
-    description = SkillDescription(
-        name="put_in",
-        skill_type="place",
-        doc="Put the held object into an empty appliance (a microwave) through its open door.",
-        parameters=[
-            OBJECT,
-            ParamSpec(name="appliance", type=Cls.Appliance, doc="where it goes"),
-            LOCATION,
-            *_DEVICES,
-            *[p for p in _TUNING if p.name != "wall"],
-            offline("wall", "float", 0.02, "wall and floor thickness of the appliance, m"),
-        ],
-        pre=[
-            contains("gripper", "object"),
-            door_is("appliance", True),
-            empty("appliance"),
-            at("robot", "location"),
-            at("appliance", "location"),
-        ],
-        hold=[contains("gripper", "object"), door_is("appliance", True)],
-        post=[contains("appliance", "object"), contains("gripper", "object", holds=False)],
-        duration=5.0,
-    )
-    target_param = "appliance"
-
-    def travel(self, ctx: SkillContext, goal: WorldPose) -> tuple[Vec3 | None, float, Vec3, float]:
-        """In through the front from ``approach`` m back; out until ``approach`` m clear of
-        the front (a joint motion home from inside the cavity would sweep the hand through
-        its walls)."""
-        wm, appliance = wm_of(ctx), element_id(ctx, "appliance")
-        front, inside = front_of(wm, appliance), depth_inside(wm, appliance, goal)
-        offset = float_param(ctx, "approach")
-        return (-front[0], -front[1], 0.0), offset, front, inside + offset

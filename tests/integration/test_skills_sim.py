@@ -32,6 +32,7 @@ from skill_agent.skills import (
     Place,
     Serve,
 )
+from tests.conftest import SlowSteps
 from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
 from wm_store.protocol import Pose
 from wm_store.vocab import Prop, Rel
@@ -141,7 +142,9 @@ async def arm_speed(world: SimWorld, robot: str) -> float:
 # --------------------------------------------------------------------------- kitting
 
 
-async def test_pick_and_place_a_part_into_the_kit_box(kitting: Sim) -> None:
+async def test_pick_and_place_a_part_into_the_kit_box(
+    kitting: Sim, blocking_detector: SlowSteps
+) -> None:
     sim = kitting
     async with sim.agent("r1", *KITTING, sensors=("Camera-1",)) as r1:
         for skill, params in (
@@ -159,6 +162,8 @@ async def test_pick_and_place_a_part_into_the_kit_box(kitting: Sim) -> None:
     kit = sim.world.body_pose("KitBox-1")
     believed = sim.wm.spatial.world_pose(sim["KitBox-1"]).position
     assert (believed.x, believed.y) == pytest.approx((kit.x, kit.y), abs=0.02)
+    runs = [r for r in blocking_detector.reports if "skill run" in r]  # the skills' own tasks
+    assert not runs, "no skill step held the event loop for 50 ms"
 
 
 async def test_locate_writes_the_pose_it_sees(kitting: Sim) -> None:

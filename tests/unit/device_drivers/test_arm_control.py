@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import AsyncIterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -154,8 +155,10 @@ async def test_stop_mid_motion_halts_and_holds(world: SimWorld) -> None:
 
 async def test_cancelling_a_motion_halts_the_arm(world: SimWorld) -> None:
     arm = arm_of(world)
-    with anyio.move_on_after(0.05):
-        await arm.move_joints({"shoulder_lift": 1.2, "elbow": 1.5}, duration=3.0)
+    async with anyio.create_task_group() as tg:
+        tg.start_soon(partial(arm.move_joints, {"shoulder_lift": 1.2, "elbow": 1.5}, duration=3.0))
+        await world.sleep(1.0)
+        tg.cancel_scope.cancel()  # the move halts the arm before it lets the cancellation go
     await world.sleep(0.1)
     assert await joint_speed(world) < 0.05
     held = (await arm.state()).joints

@@ -353,3 +353,19 @@ async def test_publisher_bursts_progress_and_never_delays_a_result() -> None:
         assert [e for _, e in mesh.puts[2:]] == [progress[0], result], "a result flushes at once"
         assert {k for k, _ in mesh.puts} == {"skimesh/m/agents/a1/runs/r1/progress"}
         tg.cancel_scope.cancel()
+
+
+async def test_call_answers_with_the_result_in_one_round_trip(
+    router_endpoint: str, mesh_name: str
+) -> None:
+    async with real_agent(router_endpoint, mesh_name), session(router_endpoint, mesh_name) as m:
+        client = AgentClient(m, "a1")
+        result = await client.call("echo", {"n": 3})
+        assert result.success
+        assert result.reason == "ok"
+        assert result.skill == "echo"
+        with pytest.raises(UnknownSkillError):
+            await client.call("ecko")
+        late = await client.call("slow", timeout=0.3)
+        assert (late.success, late.reason) == (False, "timeout"), "the agent enforces the limit"
+        assert not await client.runs(), "nothing is left running"

@@ -1,0 +1,106 @@
+"""The private world of task verification: a :class:`SceneView` over a copy of the world model,
+and what parallel branches change in it (:func:`changes`, :func:`clashes`).
+
+The symbolic simulation of :mod:`task_agent.verify` applies predicted effects to a
+:class:`~wm_store.state.SceneState` copied from the caller's view (:func:`scene_copy`), never to
+the view itself. :func:`changes` lists the facts one branch changed, as *facts*:
+
+- ``("rel", s, p, o)``  -> True (made true) / False (made false)
+- ``("prop", id, q)``   -> the new value (None: deleted)
+- ``("parent", id)``    -> the new spatial parent, ``"<id> (<predicate>)"`` (None: none)
+
+Two branches *clash* on a fact both change to different values: which one wins depends on
+which finishes last. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+from wm_store.ontology import Ontology
+from wm_store.protocol import Element, Query, Relation
+from wm_store.query import match_relations, resolve
+from wm_store.state import SceneState
+
+from skill_agent.skill import WorldView
+
+__all__ = ["Fact", "SceneView", "changes", "clashes", "scene_copy"]
+
+Fact = tuple[str, ...]
+
+
+class SceneView:
+    """A :class:`~skill_agent.skill.WorldView` over a private :class:`SceneState`."""
+
+    def __init__(self, state: SceneState, ontology: Ontology) -> None:
+        self.state, self._ontology = state, ontology
+
+    @property
+    def ontology(self) -> Ontology:
+        return self._ontology
+
+    def get_element(self, element_id: str) -> Element:
+        element = self.state.get(element_id)
+        if element is None:
+            raise KeyError(element_id)
+        return element
+
+    def find_element(self, element_id: str) -> Element | None:
+        return self.state.get(element_id)
+
+    def resolve_element(self, query: Query | None = None, *, type: str = "") -> list[Element]:
+        return resolve(self.state, self._ontology, query or Query(type=type))
+
+    def query_relation(
+        self, subject: str = "", predicate: str = "", obj: str = ""
+    ) -> list[Relation]:
+        return match_relations(self.state, self._ontology, subject, predicate, obj)
+
+
+def scene_copy(view: WorldView) -> SceneState:
+    """A private copy of the elements and relations ``view`` shows."""
+    if isinstance(view, SceneView):
+        return view.state.copy()
+    state = SceneState()
+    state.set_spatial_predicates(n for n, r in view.ontology.relations.items() if r.spatial)
+    for element in view.resolve_element():
+        state.put_element(element)
+    for rel in view.query_relation():
+        state.add_relation(rel)
+    return state
+
+
+def changes(before: SceneState, after: SceneState) -> dict[Fact, object]:
+    """The facts ``after`` changed with respect to ``before`` (see the module doc)."""
+    out: dict[Fact, object] = {}
+    old, new = set(before.all_relations()), set(after.all_relations())
+    for rel in old ^ new:
+        out[("rel", rel.subject, rel.predicate, rel.object)] = rel in new
+    for eid, element in after.elements.items():
+        prior = before.get(eid)
+        was = prior.properties if prior is not None else {}
+        for name in set(was) | set(element.properties):
+            if was.get(name) != element.properties.get(name):
+                out[("prop", eid, name)] = element.properties.get(name)
+        p0, p1 = before.parent(eid), after.parent(eid)
+        if p0 != p1:
+            out[("parent", eid)] = None if p1 is None else f"{p1.subject} ({p1.predicate})"
+    return out
+
+
+def _text(fact: Fact, a: object, b: object, names: tuple[str, str]) -> str:
+    first, second = names
+    if fact[0] == "parent":
+        return f"where {fact[1]} ends up ({first}: in {a or 'nothing'}; {second}: in {b or 'nothing'})"
+    if fact[0] == "rel":
+        truth = ("false", "true")
+        return (
+            f"{fact[2]}({fact[1]}, {fact[3]}) ({first} makes it {truth[bool(a)]}, "
+            f"{second} {truth[bool(b)]})"
+        )
+    return f"{fact[1]}.{fact[2]} ({first} sets {a!r}, {second} {b!r})"
+
+
+def clashes(
+    a: dict[Fact, object], b: dict[Fact, object], names: tuple[str, str]
+) -> list[str]:
+    """The facts two branches' :func:`changes` set differently, as text, in a stable order."""
+    return [_text(f, a[f], b[f], names) for f in sorted(a.keys() & b.keys()) if a[f] != b[f]]
