@@ -144,7 +144,7 @@ class Controller:
             job, since = item
             if self.settled() or t - since >= self.halt_timeout:
                 self._halting.remove(item)
-                self.done(job)
+                self.done(job, t - since)  # the result: simulated seconds to stand still
 
     def done(self, job: Job, result: Any = None, error: BaseException | None = None) -> None:
         job.finish(result, error)

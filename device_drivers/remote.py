@@ -27,14 +27,12 @@ from functools import partial
 
 import anyio
 import anyio.abc
-import zenoh
 
 from device_drivers import protocol as p
 from device_drivers.control import DeviceKey
 from device_drivers.errors import CommandError
 from device_drivers.interfaces import Appliance, Arm, Device, Gripper, MobileBase, ObjectSensor
 from meshlink import Answer, IncomingQuery, Mesh
-from meshlink.bridge import undeclare
 
 __all__ = ["device_kind", "serve_devices"]
 
@@ -181,10 +179,7 @@ async def _publish_states(mesh: Mesh, devices: dict[DeviceKey, Device], rate: fl
     kinds = {key: device_kind(d) for key, d in devices.items()}
     keys = [key for key, kind in kinds.items() if kind != "sensor"]
     publishers = {
-        key: mesh.session.declare_publisher(
-            mesh.keys.device_state(*key), congestion_control=zenoh.CongestionControl.DROP
-        )
-        for key in keys
+        key: mesh.publisher(mesh.keys.device_state(*key), latest_only=True) for key in keys
     }
     last: dict[DeviceKey, tuple[bytes, float]] = {}
     try:
@@ -199,4 +194,4 @@ async def _publish_states(mesh: Mesh, devices: dict[DeviceKey, Device], rate: fl
             await anyio.sleep(1.0 / rate)
     finally:
         for publisher in publishers.values():
-            undeclare(publisher)
+            publisher.undeclare()

@@ -21,6 +21,7 @@ from .errors import (
     RemoteError,
     SessionError,
 )
+from .keyexpr import intersects
 from .keys import KeySpace, check_name
 from .messages import (
     Answer,
@@ -63,6 +64,7 @@ __all__ = [
     "add_mesh_arguments",
     "check_endpoint",
     "check_name",
+    "intersects",
     "mesh_config_from_args",
     "open_mesh",
     "router_config",

@@ -21,22 +21,26 @@ __all__ = ["MeshPublisher", "MeshToken"]
 
 
 class MeshPublisher:
-    """A reliable publisher on one key with BLOCK congestion control.
+    """A reliable publisher on one key.
+
+    By default congestion control is BLOCK: nothing is dropped (changes, commands, events).
+    With ``latest_only`` it is DROP: for periodic state where the newest sample supersedes
+    the others, a full send queue drops a sample instead of holding the publisher.
 
     :meth:`put` / :meth:`delete` raise :class:`~meshlink.errors.SessionError` once undeclared
     and ``zenoh.ZError`` after the session closed.
     """
 
-    def __init__(self, session: zenoh.Session, key_expr: str) -> None:
+    def __init__(self, session: zenoh.Session, key_expr: str, *, latest_only: bool = False) -> None:
+        congestion = zenoh.CongestionControl.DROP if latest_only else zenoh.CongestionControl.BLOCK
         self._publisher: zenoh.Publisher | None = session.declare_publisher(
-            key_expr,
-            congestion_control=zenoh.CongestionControl.BLOCK,
-            reliability=zenoh.Reliability.RELIABLE,
+            key_expr, congestion_control=congestion, reliability=zenoh.Reliability.RELIABLE
         )
         self.key_expr = key_expr
+        self.latest_only = latest_only
 
     def put(self, payload: bytes, *, encoding: str = "") -> None:
-        """Publish ``payload``; may wait while the send queue is full (BLOCK)."""
+        """Publish ``payload``; with BLOCK, may wait while the send queue is full."""
         self._declared().put(payload, encoding=encoding or None)
 
     def delete(self) -> None:

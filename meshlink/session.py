@@ -202,10 +202,11 @@ class Mesh:
             raise self._zenoh_error(key_expr, e) from None
 
     # ---------------------------------------------------------------- publication
-    def publisher(self, key_expr: str) -> MeshPublisher:
-        """Declare a reliable publisher with BLOCK congestion control (see MeshPublisher)."""
+    def publisher(self, key_expr: str, *, latest_only: bool = False) -> MeshPublisher:
+        """Declare a reliable publisher: BLOCK congestion control, or DROP with
+        ``latest_only`` for periodic state (see MeshPublisher)."""
         try:
-            return MeshPublisher(self._session, key_expr)
+            return MeshPublisher(self._session, key_expr, latest_only=latest_only)
         except zenoh.ZError as e:
             raise self._zenoh_error(key_expr, e) from None
 

@@ -9,7 +9,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .commands import agent, demo, router, sim, wm
+from .commands import agent, demo, router, sim, task, wm
 from .runtime import configure_logging
 
 __all__ = ["build_parser", "main"]
@@ -31,6 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     agent.add_parser(sub)
     demo.add_parser(sub)
     sim.add_parser(sub)
+    task.add_parser(sub)
     return parser
 
 

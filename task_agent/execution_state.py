@@ -22,8 +22,8 @@ from skill_agent.skill import WorldView
 from wm_store.protocol import Query, Value
 
 from .goals import Goal, RelationGoal
-from .protocol import Call, Parallel, PlannedStep, TaskBlock, TaskFile
-from .protocol import Sequence as SequenceBlock
+from .protocol import PlannedStep, TaskFile
+from .taskfile import LABEL_PREFIX, assign_ids, parse_ref, precedes, walk
 
 if TYPE_CHECKING:  # planning imports unified-planning (~1.5 s): only the executor needs it
     from .partial_order import PartialOrderPlan
@@ -106,38 +106,24 @@ def steps_from_plan(plan: PartialOrderPlan, first: int = 0) -> list[StepSpec]:
 
 
 def steps_from_file(task_file: TaskFile) -> list[StepSpec]:
-    """The calls of a task file in document order; a sequence orders its children, a parallel
-    block starts all of them after what precedes it."""
-    out: list[StepSpec] = []
-
-    def flatten(block: TaskBlock, after: tuple[int, ...]) -> tuple[int, ...]:
-        match block:
-            case Call():
-                out.append(
-                    StepSpec(
-                        index=len(out),
-                        agent=block.agent,
-                        skill=block.skill,
-                        params=dict(block.params),
-                        after=after,
-                        call_id=block.id,
-                        fallback_operator=block.fallback_operator,
-                    )
-                )
-                return (len(out) - 1,)
-            case SequenceBlock(children=children):
-                for child in children:
-                    after = flatten(child, after)
-                return after
-            case Parallel(children=children):
-                ends: tuple[int, ...] = ()
-                for child in children:
-                    ends += flatten(child, after)
-                return ends or after
-        raise TypeError(f"unknown block {block!r}")  # pragma: no cover
-
-    flatten(task_file.root, ())
-    return out
+    """The calls of a task file in document order, each after the calls that directly precede
+    it (:func:`~task_agent.taskfile.precedes`: an earlier child of a sequence holding both;
+    transitive orderings left out). Calls without an id get their path (``root.1.0``), as
+    data flow names them."""
+    sites = walk(assign_ids(task_file))
+    before = [{j for j in range(i) if precedes(sites[j], site)} for i, site in enumerate(sites)]
+    return [
+        StepSpec(
+            index=i,
+            agent=site.call.agent,
+            skill=site.call.skill,
+            params=dict(site.call.params),
+            after=tuple(sorted(j for j in before[i] if not any(j in before[k] for k in before[i]))),
+            call_id=site.call.id,
+            fallback_operator=site.call.fallback_operator,
+        )
+        for i, site in enumerate(sites)
+    ]
 
 
 def schedule(steps: Sequence[StepSpec], durations: Mapping[str, float]) -> list[StepSpec]:
@@ -194,16 +180,18 @@ def resolve_params(
     """
     out: dict[str, Value] = {}
     for name, value in params.items():
-        if isinstance(value, str) and value.startswith("@"):
-            call, _, param = value[1:].partition(".")
-            if call not in ran:
-                raise StepInputError(f"{name}={value}: step {call!r} has not run (yet)")
-            if param not in ran[call]:
-                have = ", ".join(sorted(ran[call])) or "none"
-                raise StepInputError(f"{name}={value}: step {call!r} has no {param!r} ({have})")
-            value = ran[call][param]
-        elif isinstance(value, str) and value.startswith("label:"):
-            label = value[len("label:") :]
+        ref = parse_ref(value)
+        if ref is not None:
+            if ref.step not in ran:
+                raise StepInputError(f"{name}={value}: step {ref.step!r} has not run (yet)")
+            if ref.param not in ran[ref.step]:
+                have = ", ".join(sorted(ran[ref.step])) or "none"
+                raise StepInputError(
+                    f"{name}={value}: step {ref.step!r} has no parameter {ref.param!r} ({have})"
+                )
+            value = ran[ref.step][ref.param]
+        elif isinstance(value, str) and value.startswith(LABEL_PREFIX):
+            label = value[len(LABEL_PREFIX) :]
             found = sorted(e.id for e in view.resolve_element(Query(label=label)))
             if len(found) != 1:
                 what = "no element" if not found else f"{len(found)} elements ({', '.join(found)})"

@@ -15,10 +15,12 @@ Each step then starts as soon as all its predecessors have finished (estimated d
 the skill descriptions); the makespan is the latest finish.
 
 Allocation (``balance=True``): the planner picks an agent for each step, not a balanced one.
-Greedy list scheduling then revisits the steps in start order and moves a step to another
-agent offering the same skill when the step is interchangeable there (the same skill
-parameters, re-bound to that agent's hardware, and the whole plan still replays from the
-world model's state to the goal) and the makespan shrinks; it repeats until no move helps.
+Greedy list scheduling then re-linearizes the steps by start time and revisits them in that
+order, moving a step to another agent offering the same skill when the step is interchangeable
+there (the same skill parameters, re-bound to that agent's hardware, and the whole plan still
+replays from the world model's state to the goal) and the makespan shrinks; it repeats until
+no move helps. A move is only tried when the other agent's own load plus the step is below the
+makespan (otherwise it cannot help). The steps come out in that start-time order.
 """
 
 from __future__ import annotations
@@ -264,13 +266,18 @@ def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialO
     best = _schedule(task, steps)
     moves: list[str] = []
     for _ in range(rounds):
+        # Steps in start order: a linear extension of the partial order (an edge i -> j has
+        # i < j and start_i <= start_j), so still a valid plan, and each step now sees the
+        # state it will meet when the robots work in parallel.
+        order = sorted(range(len(steps)), key=lambda i: (best.steps[i].start, i))
+        steps = [steps[i] for i in order]
+        best = _schedule(task, steps)
         load: dict[str, float] = {}
         for s in steps:
             load[s.agent] = load.get(s.agent, 0.0) + s.duration
         states: list[State] | None = None
-        order = sorted(range(len(steps)), key=lambda i: (best.steps[i].start, i))
         moved = False
-        for k in order:
+        for k in range(len(steps)):
             candidates = []
             for alt in _alternatives(task, steps[k]):
                 # the other agent's work alone would last at least this long

@@ -8,8 +8,9 @@ only the loop may touch) and solves in a worker thread through ``anyio.to_thread
 with the planner's capacity limiter (one solve at a time by default).
 
 Before solving, the task is compressed to the objects the goal can touch
-(:func:`~task_agent.reachability.relevant_objects`); the plan is replayed on the full task and,
-if that fails or the small task has no plan, the full task is solved. A goal without a plan
+(:func:`~task_agent.reachability.relevant_objects`), unless the goal itself names most objects
+(:data:`COMPRESS_BELOW`); the plan is replayed on the full task and, if that fails or the small
+task has no plan, the full task is solved. A goal without a plan
 raises :class:`~task_agent.errors.UnsolvableError` with the goal facts that can never hold
 and why (:func:`~task_agent.reachability.diagnose`); running out of time raises
 :class:`~task_agent.errors.PlannerTimeoutError`; any other engine failure
@@ -63,6 +64,7 @@ from .goals import Goal
 from .reachability import GroundStep, diagnose, relevant_objects, replay
 
 __all__ = [
+    "COMPRESS_BELOW",
     "ENVIRONMENT_SOLVES",
     "FD_SEARCH",
     "Engine",
@@ -77,6 +79,9 @@ __all__ = [
 Engine = Literal["kairos", "fast-downward"]
 ENVIRONMENT_SOLVES = 32
 """Solves per unified-planning environment before a planner starts a fresh one."""
+COMPRESS_BELOW = 0.5
+"""Compress only when the goal names fewer than this share of the task's objects: a goal
+naming most of them keeps nearly all the others too, and the analysis costs 10-20 ms."""
 
 
 class PlanStep(msgspec.Struct, frozen=True, kw_only=True):
@@ -407,7 +412,8 @@ class Planner:
         start = time.perf_counter()
         deadline = start + self.timeout
         solved = task
-        if self.compress:
+        named = {a for lit in task.goal for a in lit.args}
+        if self.compress and len(named) < COMPRESS_BELOW * len(task.objects):
             keep = relevant_objects(task)
             if len(keep) < len(task.objects):
                 solved = task.restrict(keep)

@@ -26,11 +26,17 @@ from .goals import Goal
 __all__ = [
     "SCHEMA_VERSION",
     "AbortTask",
+    "AnswerPending",
     "Call",
     "ErrorReply",
+    "ListPending",
     "ListTasks",
     "OkReply",
+    "OperatorReply",
+    "OperatorRequest",
     "Parallel",
+    "PendingReply",
+    "PendingStep",
     "Planned",
     "PlannedStep",
     "Replanning",
@@ -57,6 +63,8 @@ __all__ = [
     "VerifyProblem",
     "VerifyReply",
     "decode_event",
+    "decode_operator_reply",
+    "decode_operator_request",
     "decode_reply",
     "decode_request",
     "encode",
@@ -317,12 +325,54 @@ class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True)
 
 TaskReply: TypeAlias = TaskAccepted | TasksReply | VerifyReply | OkReply | ErrorReply
 
+# --------------------------------------------------------------------------- operator
+# ``operator/rpc``: one OperatorRequest -> one OperatorReply (errors: ErrorReply, code
+# ``unknown_request`` for an id that is not pending).
+
+
+class PendingStep(Struct, frozen=True, kw_only=True):
+    """A skill run the operator agent holds until a person answers it."""
+
+    id: str
+    """Short, for typing: ``skimesh operator --answer <id> success``."""
+    run_id: str
+    skill: str
+    params: dict[str, Value] = {}
+    note: str = ""
+    """What failed and what to do (from the executor)."""
+    asked_at: float = 0.0
+
+
+class ListPending(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    pass
+
+
+class AnswerPending(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """The person's answer: the step is done (``success``) or cannot be done."""
+
+    id: str
+    success: bool
+    message: str = ""
+    author: str = ""
+
+
+class PendingReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    agent: str
+    pending: list[PendingStep]
+    schema_version: int = SCHEMA_VERSION
+
+
+OperatorRequest: TypeAlias = ListPending | AnswerPending
+OperatorReply: TypeAlias = PendingReply | OkReply | ErrorReply
+
 # --------------------------------------------------------------------------- codecs
 
 _encoder = msgspec.msgpack.Encoder()
 _request_decoder = msgspec.msgpack.Decoder(TaskRequest)
 _reply_decoder = msgspec.msgpack.Decoder(TaskReply)
 _event_decoder = msgspec.msgpack.Decoder(TaskEvent)
+_operator_request_decoder = msgspec.msgpack.Decoder(OperatorRequest)
+_operator_reply_decoder = msgspec.msgpack.Decoder(OperatorReply)
 
 
 def encode(message: Any) -> bytes:
@@ -339,3 +389,11 @@ def decode_reply(data: bytes) -> TaskReply:
 
 def decode_event(data: bytes) -> TaskEvent:
     return _event_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+
+
+def decode_operator_request(data: bytes) -> OperatorRequest:
+    return _operator_request_decoder.decode(data)  # type: ignore[no-any-return]  # untyped union
+
+
+def decode_operator_reply(data: bytes) -> OperatorReply:
+    return _operator_reply_decoder.decode(data)  # type: ignore[no-any-return]  # untyped union

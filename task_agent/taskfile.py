@@ -202,9 +202,9 @@ def _line_index(text: str) -> dict[tuple[str | int, ...], int]:
             table = concrete
             lines.setdefault(table, number)
             continue
-        key = _KEY.match(line)
-        if key:
-            lines.setdefault((*table, *_keys(key.group(1))), number)
+        assignment = _KEY.match(line)
+        if assignment:
+            lines.setdefault((*table, *_keys(assignment.group(1))), number)
     return lines
 
 

@@ -3,24 +3,26 @@ and what parallel branches change in it (:func:`changes`, :func:`clashes`).
 
 The symbolic simulation of :mod:`task_agent.verify` applies predicted effects to a
 :class:`~wm_store.state.SceneState` copied from the caller's view (:func:`scene_copy`), never to
-the view itself. :func:`changes` lists the facts one branch changed, as *facts*:
+the view itself. :func:`changes` lists what one branch changed that another branch could change
+differently, as *facts*:
 
-- ``("rel", s, p, o)``  -> True (made true) / False (made false)
 - ``("prop", id, q)``   -> the new value (None: deleted)
 - ``("parent", id)``    -> the new spatial parent, ``"<id> (<predicate>)"`` (None: none)
 
 Two branches *clash* on a fact both change to different values: which one wins depends on
-which finishes last. Pure: no I/O.
+which finishes last. (A relation is true or false: two branches starting from one state can
+only change it the same way; a spatial relation moves its object, hence ``parent``.) Effects
+that cannot coexist otherwise (a second ``at`` where the ontology allows one) fail when the
+branches' effects are combined. Pure: no I/O.
 """
 
 from __future__ import annotations
 
+from skill_agent.skill import WorldView
 from wm_store.ontology import Ontology
 from wm_store.protocol import Element, Query, Relation
 from wm_store.query import match_relations, resolve
 from wm_store.state import SceneState
-
-from skill_agent.skill import WorldView
 
 __all__ = ["Fact", "SceneView", "changes", "clashes", "scene_copy"]
 
@@ -71,9 +73,6 @@ def scene_copy(view: WorldView) -> SceneState:
 def changes(before: SceneState, after: SceneState) -> dict[Fact, object]:
     """The facts ``after`` changed with respect to ``before`` (see the module doc)."""
     out: dict[Fact, object] = {}
-    old, new = set(before.all_relations()), set(after.all_relations())
-    for rel in old ^ new:
-        out[("rel", rel.subject, rel.predicate, rel.object)] = rel in new
     for eid, element in after.elements.items():
         prior = before.get(eid)
         was = prior.properties if prior is not None else {}
@@ -89,18 +88,11 @@ def changes(before: SceneState, after: SceneState) -> dict[Fact, object]:
 def _text(fact: Fact, a: object, b: object, names: tuple[str, str]) -> str:
     first, second = names
     if fact[0] == "parent":
-        return f"where {fact[1]} ends up ({first}: in {a or 'nothing'}; {second}: in {b or 'nothing'})"
-    if fact[0] == "rel":
-        truth = ("false", "true")
-        return (
-            f"{fact[2]}({fact[1]}, {fact[3]}) ({first} makes it {truth[bool(a)]}, "
-            f"{second} {truth[bool(b)]})"
-        )
+        into = (a or "nothing", b or "nothing")
+        return f"where {fact[1]} goes ({first}: into {into[0]}; {second}: into {into[1]})"
     return f"{fact[1]}.{fact[2]} ({first} sets {a!r}, {second} {b!r})"
 
 
-def clashes(
-    a: dict[Fact, object], b: dict[Fact, object], names: tuple[str, str]
-) -> list[str]:
+def clashes(a: dict[Fact, object], b: dict[Fact, object], names: tuple[str, str]) -> list[str]:
     """The facts two branches' :func:`changes` set differently, as text, in a stable order."""
     return [_text(f, a[f], b[f], names) for f in sorted(a.keys() & b.keys()) if a[f] != b[f]]

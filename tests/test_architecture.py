@@ -65,6 +65,15 @@ def test_world_model_core_is_transport_free() -> None:
         assert not bad, f"{rel} is core but imports {sorted(bad)}; only adapters may"
 
 
+def test_only_meshlink_talks_to_zenoh() -> None:
+    """Every thread/async crossing lives in meshlink; the other packages use its API."""
+    for package in PACKAGES:
+        if package == "meshlink":
+            continue
+        for path in modules(package):
+            assert "zenoh" not in imports_of(path), f"{path.relative_to(ROOT)} imports zenoh"
+
+
 @pytest.mark.parametrize("package", PACKAGES)
 def test_public_api_exists(package: str) -> None:
     module = importlib.import_module(package)

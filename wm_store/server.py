@@ -18,10 +18,9 @@ from collections.abc import Callable
 
 import anyio
 import msgspec
-import zenoh
 from anyio.abc import TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh
+from meshlink import Answer, IncomingQuery, Mesh, intersects
 
 from .presence import PresenceMonitor
 from .protocol import Change
@@ -87,8 +86,7 @@ def _element_answers(store: WmStore, key_of: Callable[[str], str], selector: str
         element_id = selector.rsplit("/", 1)[-1]
         ids = [element_id] if element_id in elements and key_of(element_id) == selector else []
     else:
-        wanted = zenoh.KeyExpr(selector)
-        ids = [i for i in sorted(elements) if wanted.intersects(zenoh.KeyExpr(key_of(i)))]
+        ids = [i for i in sorted(elements) if intersects(selector, key_of(i))]
     return [
         Answer(key=key_of(i), payload=_json.encode(elements[i]), encoding="application/json")
         for i in ids

@@ -2,10 +2,12 @@
 open): grasp an object and lift it.
 
 ``pre_sense`` locates the object (``locate``). ``execute`` plans the grasp from the object's
-pose, size and grasp data (:func:`~skill_agent.primitives.plan_grasp`), opens the gripper,
-approaches (a free move to a pre-grasp pose ``approach`` m back, then a straight move in),
-closes and lifts. ``post_sense`` verifies with the gripper's own report that it holds *this*
-object (both pads on it), else the run fails with "grasp failed: ..." and the gripper opens.
+pose, size and grasp data (:func:`~skill_agent.primitives.plan_grasp`; no grasp fits: it fails
+before anything moves), opens the gripper, brings the arm to its home posture (the arm's
+``jointPositions``: a known IK branch), approaches (a free move to a pre-grasp pose
+``approach`` m back, then a straight move in), closes and lifts. ``post_sense`` verifies with
+the gripper's own report that it holds *this* object (both pads on it), else the run fails
+with "grasp failed: ..." and the gripper opens.
 The prediction, ``contain(gripper, object)``, takes the object out of its holder in the world
 model. A stop halts the arm; the gripper keeps a grasped object and opens otherwise.
 """
@@ -20,7 +22,15 @@ from device_drivers.interfaces import Arm, ProgressCallback, WorldPose
 from wm_store.vocab import Cls, Rel
 
 from ..errors import SkillFailure
-from ..primitives import NoGraspError, approach, close_gripper, open_gripper, plan_grasp, retreat
+from ..primitives import (
+    Grasp,
+    NoGraspError,
+    approach,
+    close_gripper,
+    open_gripper,
+    plan_grasp,
+    retreat,
+)
 from ..primitives.poses import Vec3
 from ..protocol import ParamSpec, RelationCond, SkillDescription
 from ..skill import Skill, SkillContext
@@ -115,21 +125,26 @@ class Pick(Skill):
         pose, _ = obj.require("pick")
         holder = geometry(wm, element_id(ctx, self.holder_param))
         around = (holder.pose, holder.extents) if holder.pose and holder.extents else None
-        try:
-            grasp = plan_grasp(
-                pose,
-                obj.size,
-                grasp_pose=obj.grasp_pose(),
-                grasp_width=obj.grasp_width(),
-                holder=around,
-                current=(await arm.state()).tcp,
-            )
-        except NoGraspError as exc:
-            raise SkillFailure(f"pick: {obj.label}: {exc}") from exc
-        inward, offset, lift = self.travel(ctx, grasp.tcp)
+
+        def plan(current: WorldPose) -> Grasp:
+            try:
+                return plan_grasp(
+                    pose,
+                    obj.size,
+                    grasp_pose=obj.grasp_pose(),
+                    grasp_width=obj.grasp_width(),
+                    holder=around,
+                    current=current,
+                )
+            except NoGraspError as exc:
+                raise SkillFailure(f"pick: {obj.label}: {exc}") from exc
+
+        plan((await arm.state()).tcp)  # no grasp: fail before anything moves
         try:
             await open_gripper(gripper)
             await go_home(ctx, arm)
+            grasp = plan((await arm.state()).tcp)  # the finger sign nearest the home posture
+            inward, offset, lift = self.travel(ctx, grasp.tcp)
             await tracked(
                 ctx,
                 f"approaching {obj.label} ({grasp.strategy} grasp)",

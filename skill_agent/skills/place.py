@@ -2,11 +2,13 @@
 variants ``serve`` (onto a tray) and ``put_in`` (into an appliance) are in
 :mod:`skill_agent.skills.serve`.
 
-``execute`` first checks the gripper still holds the object, picks a free spot on the
-target's floor (:func:`~skill_agent.primitives.free_spot`, away from what the world model
-says is already there), computes where the tcp must go for the object's bottom to be ``drop``
-m above it (:func:`~skill_agent.primitives.release_pose`, from the grasp the object was
-picked with), approaches, releases (opening just wider than the object) and retreats. An arm
+``execute`` first checks the gripper still holds the object, finds free spots on the target's
+floor (:func:`~skill_agent.primitives.free_spots`, away from what the world model says is
+already there), carries the object through the arm's home posture, computes where the tcp
+must go for the object's bottom to be ``drop`` m above a spot
+(:func:`~skill_agent.primitives.release_pose`, from the grasp the object was picked with),
+approaches (the next spot if one is out of reach), releases (opening just wider than the
+object) and retreats. An arm
 that cannot reach all the way down (a kit box low behind its shoulder) releases where it
 stopped if the object is already below the target's rim, straight above the spot.
 

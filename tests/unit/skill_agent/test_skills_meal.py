@@ -12,6 +12,7 @@ import pytest
 from device_drivers.robot_spec import Pose2D
 from skill_agent.errors import PreconditionError
 from skill_agent.protocol import StartRun
+from skill_agent.simulated import SimulatedOutcomes
 from skill_agent.skills import (
     HEATED,
     ApplianceCloseDoor,
@@ -180,3 +181,31 @@ def test_the_handle_swings_out_of_the_front() -> None:
     assert (closed.x, closed.y) == pytest.approx((0.01, 0.17))
     assert (opened.x, opened.y) == pytest.approx((0.37, -0.21), abs=1e-6)
     assert closed.z == opened.z == pytest.approx(0.5)
+
+
+async def test_the_microwave_round_trip_in_simulated_outcome_mode(meal: Rig) -> None:
+    box, oven = meal["MealBox-1"], meal["Microwave-1"]
+    outcomes = SimulatedOutcomes(seed=3)
+    async with (
+        meal.agent("friend", *ARM_SKILLS, simulated=outcomes) as friend,
+        meal.agent(
+            "Microwave-1", ApplianceOpenDoor, ApplianceCloseDoor, Heat, simulated=outcomes
+        ) as microwave_agent,
+    ):
+        steps = [
+            (microwave_agent, "open_door", {}),
+            (friend, "pick", {"object": box}),
+            (friend, "put_in", {"object": box, "appliance": oven}),
+            (microwave_agent, "close_door", {}),
+            (microwave_agent, "heat", {"object": box}),
+            (microwave_agent, "open_door", {}),
+            (friend, "take_out", {"object": box}),
+            (friend, "serve", {"object": box}),
+        ]
+        for core, skill, params in steps:
+            result = await run(core, skill, **params)
+            assert result.success, f"{skill}: {result.message}"
+    assert meal.wm.get_parent(box).id == meal["Tray-1"]  # type: ignore[union-attr]
+    assert await door_open(meal)
+    if HEATED:
+        assert meal.wm.get_element(box).properties[HEATED] is True

@@ -1,0 +1,179 @@
+"""``skimesh operator``: the person's side of semi-autonomy (FRIEND II).
+
+When a step fails and its task allows it, the task agent hands the step to the operator agent,
+which holds it as a *pending request* until a person answers. This command lists the pending
+requests and answers them:
+
+- ``skimesh operator``: list them (on a terminal: answer them one by one as they come,
+  ``s``/``success`` or ``f``/``failure``, optionally followed by a message; Ctrl-D ends);
+- ``skimesh operator --wait 30``: first wait up to 30 s for a request (scripts);
+- ``skimesh operator --answer ID success|failure [--message TEXT]``: answer one.
+
+Exit codes: 0 done, 1 ``--wait`` saw no request in time, 4 errors (no operator agent, an
+unknown request id). Ctrl-C / SIGTERM ends it cleanly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import sys
+import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+import anyio
+import msgspec
+
+from meshlink import Mesh, MeshlinkError, add_mesh_arguments
+from meshlink.messages import Sample
+from meshlink.subscription import Subscription
+from task_agent.client import OperatorClient
+from task_agent.errors import TaskError
+from task_agent.protocol import PendingStep
+
+from ..connect import mesh_session
+from ..runtime import run_service
+
+__all__ = ["add_parser"]
+
+Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
+EXIT_NONE, EXIT_ERROR = 1, 4
+VERDICTS = {"s": True, "success": True, "done": True, "f": False, "failure": False}
+
+
+def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "operator",
+        help="list the steps waiting for a person and answer them (semi-autonomy)",
+        description=__doc__.split("\n\n", 1)[1] if __doc__ else None,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_mesh_arguments(p)
+    p.add_argument("--timeout", type=float, default=5.0, help="request timeout in seconds")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--answer", nargs=2, metavar=("ID", "VERDICT"), help="success or failure")
+    p.add_argument("--message", default="", help="with --answer: what was done")
+    p.add_argument("--wait", type=float, metavar="S", help="wait up to S s for a request")
+    p.add_argument("-i", "--interactive", action="store_true", help="answer requests as they come")
+    p.add_argument("--agent", default="operator", help="the operator agent's name")
+    p.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    async def main() -> int:
+        try:
+            async with mesh_session(args) as mesh:
+                client = OperatorClient(mesh, timeout=args.timeout)
+                if args.answer:
+                    return await _answer(client, *args.answer, message=args.message)
+                interactive = args.interactive or (
+                    sys.stdin.isatty() and not args.json and args.wait is None
+                )
+                async with _wakeups(mesh, args.agent) as wakeups:
+                    if interactive:
+                        return await _interactive(client, wakeups)
+                    return await _list(args, client, wakeups)
+        except (TaskError, MeshlinkError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_ERROR
+
+    return run_service(main)
+
+
+@asynccontextmanager
+async def _wakeups(mesh: Mesh, agent: str) -> AsyncIterator[Subscription[Sample]]:
+    """The operator agent's run progress: a new request publishes one (no polling)."""
+    async with mesh.subscribe(mesh.keys.runs_progress(agent)) as samples:
+        yield samples
+
+
+async def _changed(wakeups: Subscription[Sample], timeout: float) -> None:
+    """Until the operator agent reports something (or ``timeout`` s, a safety net)."""
+    with anyio.move_on_after(timeout):
+        await wakeups.receive()
+    while True:
+        try:
+            wakeups.receive_nowait()
+        except anyio.WouldBlock:
+            return
+
+
+def _line(step: PendingStep) -> str:
+    args = ", ".join(f"{k}={v}" for k, v in step.params.items())
+    age = time.time() - step.asked_at
+    return f"[{step.id}] {step.skill}({args})  waiting {age:.0f} s\n    {step.note}"
+
+
+async def _answer(client: OperatorClient, request_id: str, verdict: str, *, message: str) -> int:
+    if verdict.lower() not in VERDICTS:
+        print(f"error: the verdict is 'success' or 'failure', not {verdict!r}", file=sys.stderr)
+        return EXIT_ERROR
+    print(await client.answer(request_id, VERDICTS[verdict.lower()], message, author="cli"))
+    return 0
+
+
+async def _list(
+    args: argparse.Namespace, client: OperatorClient, wakeups: Subscription[Sample]
+) -> int:
+    pending = await client.pending()
+    if args.wait is not None:
+        deadline = anyio.current_time() + args.wait
+        while not pending and anyio.current_time() < deadline:
+            await _changed(wakeups, min(1.0, max(0.0, deadline - anyio.current_time())))
+            pending = await client.pending()
+    if args.json:
+        sys.stdout.write(msgspec.json.encode(pending).decode() + "\n")
+    elif pending:
+        print("\n".join(_line(step) for step in pending))
+    else:
+        print("no step is waiting for the operator")
+    return 0 if pending or args.wait is None else EXIT_NONE
+
+
+async def _interactive(client: OperatorClient, wakeups: Subscription[Sample]) -> int:
+    asked: set[str] = set()
+    async with _stdin_lines() as lines:
+        print("waiting for requests (answer s[uccess] or f[ailure] [message]; Ctrl-D ends)")
+        while True:
+            new = [s for s in await client.pending() if s.id not in asked]
+            if not new:
+                await _changed(wakeups, 2.0)
+                continue
+            for step in new:
+                asked.add(step.id)
+                print(_line(step))
+                while True:
+                    print(f"answer request {step.id}: ", end="", flush=True)
+                    text = await lines.readline()
+                    if not text:
+                        return 0
+                    word, _, message = text.decode().strip().partition(" ")
+                    if word.lower() in VERDICTS:
+                        break
+                    print("  type s (success) or f (failure), optionally followed by a message")
+                try:
+                    print(
+                        "  " + await client.answer(step.id, VERDICTS[word.lower()], message, "cli")
+                    )
+                except TaskError as e:  # withdrawn meanwhile (the task was aborted)
+                    print(f"  {e}")
+
+
+@asynccontextmanager
+async def _stdin_lines() -> AsyncIterator[asyncio.StreamReader]:
+    """Standard input as an asyncio stream (no thread: a blocked reading thread would keep
+    the process alive after Ctrl-C). The blocking mode of the descriptor is restored."""
+    loop = asyncio.get_running_loop()
+    reader = asyncio.StreamReader()
+    fd = sys.stdin.fileno()
+    blocking = os.get_blocking(fd)
+    transport, _ = await loop.connect_read_pipe(
+        lambda: asyncio.StreamReaderProtocol(reader), sys.stdin
+    )
+    try:
+        yield reader
+    finally:
+        transport.close()
+        os.set_blocking(fd, blocking)

@@ -1,0 +1,389 @@
+"""``skimesh task-agent`` (the planning / execution service, with the operator agent) and the
+task CLI: ``skimesh task submit|status|list|abort|watch|verify``.
+
+``skimesh task submit --goal TEXT`` (or ``--file TASK.toml``) follows the task to its end with
+one line per event (per robot and per step: started, progress, finished; replanning) and a
+summary (outcome, steps, replans, busy time per robot); ``--json`` prints every event as one
+JSON line instead. Ctrl-C (or SIGTERM) aborts the task (every run is stopped and its robot
+brought to a safe state) before the command exits.
+
+Exit codes of ``submit`` and ``watch``: 0 succeeded, 1 failed, 2 unsolvable, 3 aborted,
+4 usage or other errors (bad goal, a task file that does not verify, no task agent); 130
+interrupted (the task was aborted). ``verify``: 0 verifies, 1 problems, 4 errors.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from pathlib import Path
+from typing import NoReturn
+
+import anyio
+import msgspec
+
+from meshlink import MeshlinkError, add_mesh_arguments
+from task_agent.client import TaskClient, new_task_id
+from task_agent.errors import TaskError, VerificationError
+from task_agent.protocol import (
+    Planned,
+    Replanning,
+    StepFinished,
+    StepProgress,
+    StepStarted,
+    TaskEvent,
+    TaskFinished,
+    TaskInfo,
+    TaskOptions,
+    TaskStarted,
+    VerifyProblem,
+)
+from wm_store import WmClient, WmError, ZenohTransport
+
+from ..connect import mesh_session
+from ..runtime import run_service
+from . import operator as operator_command
+
+__all__ = ["EXIT_CODES", "ProgressPrinter", "add_parser"]
+
+Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
+EXIT_CODES = {"succeeded": 0, "failed": 1, "unsolvable": 2, "aborted": 3}
+EXIT_ERROR, EXIT_INTERRUPTED = 4, 130
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors exit with 4 (2 means "unsolvable" for ``task submit``)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        self.exit(EXIT_ERROR, f"{self.prog}: error: {message}\n")
+
+
+def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
+    """Add ``task-agent``, ``task`` and ``operator``."""
+    agent = sub.add_parser(
+        "task-agent",
+        help="run the task agent: planning, multi-robot execution, the operator agent",
+        description="Serve tasks/rpc: plan goals, run task files, replan on failure; also "
+        "serves the operator agent (semi-autonomy) unless --no-operator. Stops cleanly on "
+        "Ctrl-C / SIGTERM (running tasks are aborted, their runs stopped).",
+    )
+    add_mesh_arguments(agent)
+    agent.add_argument("--timeout", type=float, default=5.0, help="world-model timeout (s)")
+    agent.add_argument("--operator", default="operator", metavar="NAME", help="operator agent")
+    agent.add_argument("--no-operator", action="store_true", help="serve no operator agent")
+    agent.set_defaults(func=_serve)
+
+    task = sub.add_parser("task", help="submit, follow, list and abort tasks")
+    cmds = task.add_subparsers(dest="task_command", metavar="COMMAND", parser_class=_Parser)
+    task.set_defaults(func=lambda _a: _usage(task))
+
+    submit = cmds.add_parser(
+        "submit",
+        help="submit a goal or a task file and follow it to its end",
+        description="Exit codes: 0 succeeded, 1 failed, 2 unsolvable, 3 aborted, 4 usage or "
+        "other errors, 130 interrupted (the task is aborted first).",
+    )
+    what = submit.add_mutually_exclusive_group(required=True)
+    what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
+    what.add_argument("--file", type=Path, help="a task file (TOML sequence/parallel blocks)")
+    submit.add_argument("--task-id", default="", help="default: a fresh t-<hex> id")
+    submit.add_argument("--engine", choices=("kairos", "fast-downward"), default="kairos")
+    submit.add_argument("--planner-timeout", type=float, default=30.0, metavar="S")
+    submit.add_argument("--max-replans", type=int, default=3, metavar="N")
+    submit.add_argument("--simulate", action="store_true", help="simulated outcomes for every run")
+    submit.add_argument(
+        "--operator-fallback", action="store_true", help="ask the operator when a step fails"
+    )
+    submit.add_argument("--detach", action="store_true", help="print the task id and return")
+    submit.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
+    _client_arguments(submit)
+    submit.set_defaults(func=lambda a: _client(a, _submit))
+
+    status = cmds.add_parser("status", help="one task's state")
+    status.add_argument("task_id")
+    _client_arguments(status)
+    status.set_defaults(func=lambda a: _client(a, _status))
+
+    listing = cmds.add_parser("list", help="the tasks the task agent knows")
+    listing.add_argument("--active", action="store_true", help="running tasks only")
+    _client_arguments(listing)
+    listing.set_defaults(func=lambda a: _client(a, _list))
+
+    abort = cmds.add_parser("abort", help="stop every run of a task (robots to a safe state)")
+    abort.add_argument("task_id")
+    abort.add_argument("--reason", default="aborted from the command line")
+    _client_arguments(abort)
+    abort.set_defaults(func=lambda a: _client(a, _abort))
+
+    watch = cmds.add_parser("watch", help="follow a running task (exit codes as for submit)")
+    watch.add_argument("task_id")
+    watch.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
+    _client_arguments(watch)
+    watch.set_defaults(func=lambda a: _client(a, _watch))
+
+    verify = cmds.add_parser("verify", help="verify a task file against the world model")
+    verify.add_argument("file", type=Path)
+    _client_arguments(verify)
+    verify.set_defaults(func=lambda a: _client(a, _verify))
+
+    operator_command.add_parser(sub)
+
+
+def _client_arguments(p: argparse.ArgumentParser) -> None:
+    add_mesh_arguments(p)
+    p.add_argument("--timeout", type=float, default=5.0, help="request timeout in seconds")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def _usage(parser: argparse.ArgumentParser) -> int:
+    parser.print_help(sys.stderr)
+    return EXIT_ERROR
+
+
+# --------------------------------------------------------------------------- task-agent
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from task_agent.service import serve_tasks  # the planner (~1.5 s): only for the service
+
+    async def main() -> int:
+        try:
+            async with (
+                mesh_session(args) as mesh,
+                WmClient.connect(
+                    ZenohTransport(mesh), author="task-agent", timeout=args.timeout
+                ) as wm,
+            ):
+                operator = None if args.no_operator else args.operator
+                await serve_tasks(mesh, wm, operator=operator)  # until cancelled
+        except (WmError, MeshlinkError) as e:
+            print(f"skimesh task-agent: {e}", file=sys.stderr)
+            return EXIT_ERROR
+        return 0
+
+    return run_service(main)
+
+
+# --------------------------------------------------------------------------- output
+
+
+def _print_json(obj: object) -> None:
+    sys.stdout.write(msgspec.json.encode(obj).decode() + "\n")
+    sys.stdout.flush()
+
+
+class ProgressPrinter:
+    """One line per event (times from the task's start), then a summary per robot."""
+
+    def __init__(self) -> None:
+        self.t0: float | None = None
+        self.skills: dict[int, str] = {}
+        self.begun: dict[int, float] = {}
+        self.busy: dict[str, float] = {}
+        self.count: dict[str, int] = {}
+
+    def __call__(self, event: TaskEvent) -> None:
+        for line in self.lines(event):
+            print(line, flush=True)
+
+    def lines(self, event: TaskEvent) -> list[str]:
+        self.t0 = event.stamp if self.t0 is None else self.t0
+        at = f"{event.stamp - self.t0:7.2f}s"
+        match event:
+            case TaskStarted():
+                return [f"task {event.task_id}: {event.goal or event.name or '(unnamed)'}"]
+            case Planned():
+                return self._planned(event)
+            case StepStarted():
+                self.skills[event.step], self.begun[event.step] = event.skill, event.stamp
+                return [_step(at, event.agent, event.step, event.skill, "started")]
+            case StepProgress():
+                text = f"[{event.state}] {event.message}".rstrip()
+                skill = self.skills.get(event.step, "")
+                return [_step(at, event.agent, event.step, skill, text)]
+            case StepFinished():
+                return [_step(at, event.agent, event.step, event.skill, self._end(event))]
+            case Replanning():
+                return [f"{at}  replanning (attempt {event.attempt}): {event.reason}"]
+            case TaskFinished():
+                return self._summary(event)
+
+    def _planned(self, event: Planned) -> list[str]:
+        who = ", ".join(sorted({s.agent or "any" for s in event.steps})) or "nobody"
+        head = (
+            f"plan {event.attempt} ({event.planner}, {event.plan_seconds:.2f} s): "
+            f"{len(event.steps)} steps on {who}; makespan {event.makespan:.1f} s "
+            f"(sequential {event.sequential:.1f} s)"
+        )
+        rows = []
+        for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
+            args = ", ".join(f"{k}={v}" for k, v in s.params.items())
+            after = ",".join(map(str, s.after)) or "-"
+            rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {s.skill}({args})  after {after}")
+        return [head, *rows]
+
+    def _end(self, event: StepFinished) -> str:
+        began = self.begun.pop(event.step, None)
+        if began is not None:
+            self.busy[event.agent] = self.busy.get(event.agent, 0.0) + event.stamp - began
+            self.count[event.agent] = self.count.get(event.agent, 0) + 1
+        who = " by the operator" if event.by_operator else ""
+        if event.success:
+            return f"succeeded{who}"
+        return f"FAILED{who} ({event.reason}): {event.message}"
+
+    def _summary(self, event: TaskFinished) -> list[str]:
+        plural = "s" if event.replans != 1 else ""
+        lines = [
+            f"task {event.task_id} {event.outcome} in {event.duration:.2f} s: "
+            f"{event.steps_run} steps run, {event.replans} replan{plural}"
+        ]
+        for agent in sorted(self.count):
+            lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
+        if event.message:
+            lines.append(f"  {event.message}")
+        return lines
+
+
+def _step(at: str, agent: str, step: int, skill: str, text: str) -> str:
+    return f"{at}  {agent:<10} step {step:<3} {skill:<10} {text}"
+
+
+def _info_lines(info: TaskInfo) -> list[str]:
+    ended = f", ended {time.ctime(info.finished_at)}" if info.finished_at else ""
+    return [
+        f"{info.task_id}  {info.outcome}  {info.goal or info.name}",
+        f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
+        f"{info.replans} replans",
+        *([f"  {info.message}"] if info.message else []),
+    ]
+
+
+def _problems(problems: list[VerifyProblem]) -> None:
+    for p in problems:
+        print(f"  {p.path or '-'}  [{p.kind}] {p.message}", file=sys.stderr)
+
+
+# --------------------------------------------------------------------------- commands
+
+
+def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Awaitable[int]]) -> int:
+    interrupted: list[bool] = []
+
+    async def main() -> int:
+        try:
+            return await body(args)
+        except anyio.get_cancelled_exc_class():
+            interrupted.append(True)
+            raise
+        except VerificationError as e:
+            print(f"refused: {e}", file=sys.stderr)
+            _problems(getattr(e, "problems", []))
+            return EXIT_ERROR
+        except (TaskError, MeshlinkError, OSError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_ERROR
+        except TimeoutError:
+            print("error: the task did not finish within --deadline", file=sys.stderr)
+            return EXIT_ERROR
+
+    code = run_service(main)
+    if interrupted:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return code
+
+
+def _options(args: argparse.Namespace) -> TaskOptions:
+    return TaskOptions(
+        engine=args.engine,
+        planner_timeout=args.planner_timeout,
+        max_replans=args.max_replans,
+        simulate=args.simulate,
+        operator_fallback=args.operator_fallback,
+    )
+
+
+async def _submit(args: argparse.Namespace) -> int:
+    text = args.file.read_text(encoding="utf-8") if args.file else ""
+    task_id = args.task_id or new_task_id()
+    async with mesh_session(args) as mesh:
+        client = TaskClient(mesh, timeout=args.timeout)
+        async with client.watch(task_id, deadline=args.deadline, existing=False) as events:
+            if args.file:
+                await client.submit_file(text, options=_options(args), task_id=task_id)
+            else:
+                await client.submit_goal(args.goal, options=_options(args), task_id=task_id)
+            if args.detach:
+                print(task_id)
+                return 0
+            try:
+                return await _follow(args, events)
+            except anyio.get_cancelled_exc_class():
+                with anyio.CancelScope(shield=True), anyio.move_on_after(args.timeout + 15):
+                    print(f"aborting task {task_id} ...", file=sys.stderr)
+                    print(await client.abort(task_id, "interrupted (Ctrl-C)"), file=sys.stderr)
+                raise
+
+
+async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) -> int:
+    show: Callable[[TaskEvent], None] = _print_json if args.json else ProgressPrinter()
+    async for event in events:
+        show(event)
+        if isinstance(event, TaskFinished):
+            return EXIT_CODES.get(event.outcome, EXIT_ERROR)
+    return EXIT_ERROR  # pragma: no cover - the stream ends with TaskFinished
+
+
+async def _watch(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        client = TaskClient(mesh, timeout=args.timeout)
+        async with client.watch(args.task_id, deadline=args.deadline) as events:
+            return await _follow(args, events)
+
+
+async def _status(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        info = await TaskClient(mesh, timeout=args.timeout).status(args.task_id)
+    if args.json:
+        _print_json(info)
+    else:
+        print("\n".join(_info_lines(info)))
+    return 0
+
+
+async def _list(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        tasks = await TaskClient(mesh, timeout=args.timeout).list(active_only=args.active)
+    if args.json:
+        _print_json(tasks)
+    for info in [] if args.json else tasks:
+        print(f"{info.task_id:<14} {info.outcome:<10} {info.replans} replans  "
+              f"{info.goal or info.name}")  # fmt: skip
+    return 0
+
+
+async def _abort(args: argparse.Namespace) -> int:
+    async with mesh_session(args) as mesh:
+        print(await TaskClient(mesh, timeout=args.timeout).abort(args.task_id, args.reason))
+    return 0
+
+
+async def _verify(args: argparse.Namespace) -> int:
+    from task_agent.taskfile import load_task_file
+
+    text = args.file.read_text(encoding="utf-8")
+    load_task_file(text, source=str(args.file))  # syntax errors with the line, offline
+    async with mesh_session(args) as mesh:
+        reply = await TaskClient(mesh, timeout=args.timeout).verify(text)
+    if args.json:
+        _print_json(reply)
+    elif reply.ok:
+        print(f"{args.file}: verifies")
+    else:
+        print(f"{args.file}: {len(reply.problems)} problems", file=sys.stderr)
+        _problems(reply.problems)
+    return 0 if reply.ok else 1

@@ -1,0 +1,307 @@
+"""The task agent: :class:`TaskService` (requests -> replies, the task registry; no Zenoh) and
+:func:`serve_tasks` (its Zenoh adapter, what ``skimesh task-agent`` runs).
+
+Keys (prefix ``skimesh/<mesh>``): ``tasks/rpc`` answers one
+:data:`~task_agent.protocol.TaskRequest` with one :data:`~task_agent.protocol.TaskReply`;
+``tasks/<task>/events`` carries each task's events (congestion control BLOCK, ``seq`` 1, 2, ...).
+A client that wants every event of its task subscribes first and submits with its own
+``task_id``.
+
+Requests:
+
+- ``SubmitGoal``: the goal is parsed against the world model now (an unknown element or a
+  syntax error is refused with code ``goal_parse``); planning and execution then run as a task
+  of the service's task group, and the reply ``TaskAccepted`` comes at once. An unsolvable
+  goal ends the task with outcome ``unsolvable`` and the planner's reason.
+- ``SubmitFile``: loaded (``verification`` error for malformed TOML) and verified against the
+  world model and the agents available now; a file with problems is refused with
+  ``VerifyReply(ok=False, problems)``, else accepted like a goal. ``VerifyFile`` only verifies.
+- ``TaskStatus`` / ``ListTasks`` from the registry (the last ``keep_finished`` ended tasks are
+  kept); ``AbortTask`` stops every run of the task and answers once it ended (or after
+  ``abort_wait`` seconds).
+
+Refusals are error replies carrying ``ErrorReply{code, message}``: ``bad_request``
+(undecodable, or a task id that is no key segment), ``task_exists``, ``unknown_task``,
+``goal_parse``, ``verification``, ``internal``. Nothing malformed crashes the service or changes
+its state. Nothing blocks the loop: planning solves in a worker thread (the planner's limiter).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import uuid
+from collections import OrderedDict
+from collections.abc import Awaitable, Callable
+
+import anyio
+import msgspec
+from anyio.abc import TaskGroup, TaskStatus
+
+from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError
+from meshlink.keys import check_name
+from wm_store import WmClient
+
+from .discovery import Discovery
+from .errors import TaskError, VerificationError
+from .execution_state import WorldModel
+from .executor import Executor, PlanSource
+from .goals import check_goal, parse_goal
+from .operator import serve_operator
+from .protocol import (
+    AbortTask,
+    ErrorReply,
+    ListTasks,
+    OkReply,
+    SubmitFile,
+    SubmitGoal,
+    TaskAccepted,
+    TaskEvent,
+    TaskFinished,
+    TaskInfo,
+    TaskOptions,
+    TaskReply,
+    TaskRequest,
+    TasksReply,
+    VerifyFile,
+    VerifyProblem,
+    VerifyReply,
+    decode_request,
+    encode,
+)
+from .protocol import (
+    TaskStatus as TaskStatusRequest,
+)
+from .runners import SkillRunner, ZenohRunner
+from .taskfile import load_task_file
+from .verify import verify
+
+__all__ = ["RequestError", "TaskService", "serve_tasks"]
+
+_log = logging.getLogger(__name__)
+PlannerFactory = Callable[[TaskOptions], PlanSource]
+
+
+class RequestError(TaskError):
+    """A refused request, with its wire ``code`` (``unknown_task``, ``task_exists``, ...)."""
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def default_planners() -> PlannerFactory:
+    """One :class:`~task_agent.planner.Planner` per engine and time-out, sharing one limiter
+    (one solve at a time)."""
+    from .planner import Engine, Planner
+
+    limiter = anyio.CapacityLimiter(1)
+
+    @functools.cache
+    def make(engine: str, timeout: float) -> Planner:
+        kind: Engine = "fast-downward" if engine == "fast-downward" else "kairos"
+        return Planner(engine=kind, timeout=timeout, limiter=limiter)
+
+    return lambda options: make(options.engine, options.planner_timeout)
+
+
+class TaskService:
+    """Runs tasks and answers requests about them (see the module doc). Start :meth:`run` in a
+    task group before calling :meth:`handle`."""
+
+    def __init__(
+        self,
+        *,
+        wm: WorldModel,
+        discovery: Discovery,
+        runner: SkillRunner,
+        publish: Callable[[TaskEvent], None],
+        planners: PlannerFactory | None = None,
+        operator_agent: str = "operator",
+        keep_finished: int = 256,
+        abort_wait: float = 10.0,
+    ) -> None:
+        self.wm = wm
+        self.discovery = discovery
+        self.runner = runner
+        self.publish = publish
+        self.planners = planners or default_planners()
+        self.operator_agent = operator_agent
+        self.keep_finished = keep_finished
+        self.abort_wait = abort_wait
+        self._tasks: OrderedDict[str, tuple[Executor, anyio.Event]] = OrderedDict()
+        self._tg: TaskGroup | None = None
+
+    async def run(self, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED) -> None:
+        """Host the tasks until cancelled; cancelling aborts every running task (their runs
+        are stopped) before this returns."""
+        async with anyio.create_task_group() as tg:
+            self._tg = tg
+            try:
+                task_status.started()
+                await anyio.sleep_forever()
+            finally:
+                self._tg = None
+
+    def tasks(self, *, active_only: bool = False) -> list[TaskInfo]:
+        infos = [executor.info() for executor, _ in self._tasks.values()]
+        return [i for i in infos if i.outcome == "running" or not active_only]
+
+    # ------------------------------------------------------------------ requests
+
+    async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
+        """Decode, dispatch, encode. Returns ``(payload, ok)``; never raises an Exception."""
+        try:
+            request = decode_request(data)
+        except msgspec.MsgspecError as e:
+            return encode(ErrorReply(code="bad_request", message=f"undecodable: {e}")), False
+        try:
+            return encode(await self.handle(request)), True
+        except TaskError as e:
+            return encode(ErrorReply(code=e.code, message=str(e))), False
+        except ValueError as e:  # a task id that is no key segment
+            return encode(ErrorReply(code="bad_request", message=str(e))), False
+        except Exception as e:
+            _log.exception("request %s failed", type(request).__name__)
+            return encode(ErrorReply(code="internal", message=f"{type(e).__name__}: {e}")), False
+
+    async def handle(self, request: TaskRequest) -> TaskReply:
+        """Answer one request; refusals raise :class:`TaskError` subclasses."""
+        match request:
+            case SubmitGoal(goal=goal, options=options, task_id=task_id):
+                parsed = (
+                    parse_goal(goal, self.wm)
+                    if isinstance(goal, str)
+                    else check_goal(goal, self.wm)
+                )
+                executor = self._new(task_id, options)
+                self._start(executor, functools.partial(executor.run_goal, parsed))
+                return TaskAccepted(task_id=executor.task_id)
+            case SubmitFile(text=text, options=options, task_id=task_id):
+                task_file = load_task_file(text, source="the submitted task file")
+                problems = verify(task_file, self.wm, self.discovery.agents())
+                if problems:
+                    return VerifyReply(ok=False, problems=problems)
+                executor = self._new(task_id, options)
+                self._start(executor, functools.partial(executor.run_file, task_file))
+                return TaskAccepted(task_id=executor.task_id)
+            case VerifyFile(text=text):
+                try:
+                    task_file = load_task_file(text, source="the task file")
+                except VerificationError as e:
+                    problem = VerifyProblem(path="", kind="structure", message=str(e))
+                    return VerifyReply(ok=False, problems=[problem])
+                problems = verify(task_file, self.wm, self.discovery.agents())
+                return VerifyReply(ok=not problems, problems=problems)
+            case TaskStatusRequest(task_id=task_id):
+                return TasksReply(tasks=[self._get(task_id)[0].info()])
+            case ListTasks(active_only=active_only):
+                return TasksReply(tasks=self.tasks(active_only=active_only))
+            case AbortTask(task_id=task_id, reason=reason):
+                return await self._abort(task_id, reason)
+        raise RequestError("bad_request", f"unsupported request {type(request).__name__}")
+
+    # ------------------------------------------------------------------ registry
+
+    def _new(self, task_id: str, options: TaskOptions) -> Executor:
+        if self._tg is None:
+            raise RequestError("internal", "the task service is not running")
+        task_id = check_name(task_id, "task id") if task_id else f"t-{uuid.uuid4().hex[:10]}"
+        if task_id in self._tasks:
+            raise RequestError("task_exists", f"task {task_id!r} exists; choose another id")
+        return Executor(
+            task_id=task_id,
+            wm=self.wm,
+            discovery=self.discovery,
+            runner=self.runner,
+            publish=self.publish,
+            options=options,
+            planner=self.planners(options),
+            operator_agent=self.operator_agent,
+        )
+
+    def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:
+        assert self._tg is not None
+        done = anyio.Event()
+        self._tasks[executor.task_id] = (executor, done)
+
+        async def run() -> None:
+            try:
+                await body()
+            finally:
+                done.set()
+                self._forget_old()
+
+        self._tg.start_soon(run, name=f"task {executor.task_id}")
+
+    def _forget_old(self) -> None:
+        ended = [tid for tid, (ex, _) in self._tasks.items() if ex.outcome != "running"]
+        for task_id in ended[: max(0, len(ended) - self.keep_finished)]:
+            del self._tasks[task_id]
+
+    def _get(self, task_id: str) -> tuple[Executor, anyio.Event]:
+        found = self._tasks.get(task_id)
+        if found is None:
+            known = ", ".join(list(self._tasks)[-5:]) or "none"
+            raise RequestError("unknown_task", f"no task {task_id!r} (latest: {known})")
+        return found
+
+    async def _abort(self, task_id: str, reason: str) -> OkReply:
+        executor, done = self._get(task_id)
+        if executor.outcome != "running":
+            return OkReply(message=f"task {task_id} already ended: {executor.outcome}")
+        executor.abort(reason or "aborted on request")
+        with anyio.move_on_after(self.abort_wait):
+            await done.wait()
+        return OkReply(message=f"task {task_id}: {executor.outcome}")
+
+
+async def serve_tasks(
+    mesh: Mesh,
+    wm: WmClient,
+    *,
+    planners: PlannerFactory | None = None,
+    operator: str | None = "operator",
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
+) -> None:
+    """Serve the task agent on ``mesh`` until cancelled; with ``operator`` (a name), also the
+    operator agent (:func:`~task_agent.operator.serve_operator`). ``started`` once
+    ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped)."""
+    keys = mesh.keys
+    discovery = Discovery(wm)
+
+    def publish(event: TaskEvent) -> None:
+        try:
+            mesh.put(keys.task_events(event.task_id), encode(event))
+        except MeshlinkError as e:
+            _log.warning("could not publish an event of task %s: %s", event.task_id, e)
+
+    service = TaskService(
+        wm=wm,
+        discovery=discovery,
+        runner=ZenohRunner(mesh, alive=discovery.is_alive),
+        publish=publish,
+        planners=planners,
+        operator_agent=operator or "",
+    )
+
+    async def rpc(query: IncomingQuery) -> list[Answer]:
+        data, ok = await service.handle_bytes(query.payload or b"")
+        return [Answer(key=keys.tasks_rpc(), payload=data, ok=ok)]
+
+    async with anyio.create_task_group() as tg:
+        await tg.start(discovery.watch, mesh)
+        if operator:
+            await tg.start(
+                functools.partial(serve_operator, mesh, wm, name=operator, discovery=discovery)
+            )
+        await tg.start(service.run)
+        await tg.start(mesh.serve, keys.tasks_rpc(), rpc)
+        _log.warning(
+            "task agent ready on mesh %r: %d agents available (%s)%s",
+            keys.mesh,
+            len(discovery.agents()),
+            ", ".join(a.name for a in discovery.agents()) or "none yet",
+            f", operator agent {operator!r}" if operator else "",
+        )
+        task_status.started()

@@ -1,0 +1,139 @@
+"""The operator agent (semi-autonomy): pending requests, the operator/rpc service, the mirrored
+skills, and the executor handing a failed step to a person (in-process agents, no Zenoh)."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+import anyio
+import pytest
+
+from skill_agent.core import AgentCore
+from task_agent.execution_state import OPERATOR_NOTE
+from task_agent.goals import parse_goal
+from task_agent.operator import OperatorDesk, OperatorService, SkillMirror
+from task_agent.protocol import (
+    AnswerPending,
+    Call,
+    ErrorReply,
+    ListPending,
+    OkReply,
+    PendingReply,
+    Replanning,
+    StepFinished,
+    StepStarted,
+    TaskFile,
+    decode_operator_reply,
+    encode,
+)
+from task_agent.protocol import (
+    Sequence as SequenceBlock,
+)
+from tests.assets.task_fleet import Fleet, fleet
+
+pytestmark = pytest.mark.anyio
+
+
+class Person:
+    """Answers every request that shows up on the desk, through operator/rpc's service."""
+
+    def __init__(self, desk: OperatorDesk, *, success: bool) -> None:
+        self.service = OperatorService("operator", desk)
+        self.desk, self.success = desk, success
+        self.seen: list[str] = []
+
+    def call(self, request: ListPending | AnswerPending) -> PendingReply | OkReply | ErrorReply:
+        data, _ = self.service.handle_bytes(encode(request))
+        return decode_operator_reply(data)
+
+    async def run(self) -> None:
+        while True:
+            listed = self.call(ListPending())
+            assert isinstance(listed, PendingReply)
+            for step in listed.pending:
+                self.seen.append(step.note)
+                answer = AnswerPending(id=step.id, success=self.success, message="by hand")
+                assert isinstance(self.call(answer), OkReply)
+            await self.desk.wait_changed()
+
+
+@asynccontextmanager
+async def with_operator(f: Fleet, *, success: bool = True) -> AsyncIterator[Person]:
+    desk = OperatorDesk()
+    mirror = SkillMirror(f.discovery, desk)
+    mirror.refresh()
+    core = AgentCore(name="operator", wm=f.wm, skills=mirror.entries())
+    person = Person(desk, success=success)
+    async with anyio.create_task_group() as tg:
+        await tg.start(core.run)
+        f.runner.cores["operator"] = core
+        f.discovery.set_alive("operator", True)
+        tg.start_soon(person.run)
+        yield person
+        tg.cancel_scope.cancel()
+
+
+async def test_desk_requests_are_listed_answered_and_withdrawn() -> None:
+    desk = OperatorDesk()
+    service = OperatorService("operator", desk)
+    garbage, ok = service.handle_bytes(b"\x93garbage")
+    assert not ok and isinstance(decode_operator_reply(garbage), ErrorReply)
+    unknown, ok = service.handle_bytes(encode(AnswerPending(id="7", success=True)))
+    reply = decode_operator_reply(unknown)
+    assert not ok and isinstance(reply, ErrorReply) and reply.code == "unknown_request"
+    with pytest.raises(KeyError, match="no pending operator request '1'"):
+        desk.answer("1", True)
+
+
+async def test_mirror_offers_the_robots_skills_with_a_note_and_no_time_limit() -> None:
+    async with fleet() as f:
+        mirror = SkillMirror(f.discovery, OperatorDesk())
+        assert mirror.refresh() and not mirror.refresh()
+        assert sorted(mirror.descriptions) == ["navigate", "pick", "place", "serve"]
+        pick = mirror.descriptions["pick"]
+        assert pick.parameters[-1].name == OPERATOR_NOTE and pick.timeout is None
+        assert pick.pre == f.discovery.agents()[0].skill("pick").pre  # type: ignore[union-attr]
+
+
+async def test_a_failed_step_is_done_by_the_operator() -> None:
+    async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
+        goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
+        async with with_operator(f) as person:
+            done = await f.executor(operator_fallback=True).run_goal(goal)
+        assert done.outcome == "succeeded", done.message
+        assert not f.of(Replanning)
+        ends = [e for e in f.events if isinstance(e, StepFinished)]
+        assert [(e.agent, e.skill, e.success, e.by_operator) for e in ends] == [
+            ("r1", "pick", False, False),
+            ("operator", "pick", True, True),
+            ("r1", "place", True, False),
+        ]
+        assert len(person.seen) == 1 and "step 0 pick on r1 failed (execution)" in person.seen[0]
+        by_hand = next(e for e in f.events if isinstance(e, StepStarted) and e.agent == "operator")
+        assert by_hand.params["object"] == f.parts[0]
+        assert f.wm.query_relation(f.kits[0], "contain", f.parts[0])
+
+
+async def test_an_operator_failure_fails_the_step() -> None:
+    async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
+        goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
+        async with with_operator(f, success=False):
+            done = await f.executor(operator_fallback=True, max_replans=0).run_goal(goal)
+        assert done.outcome == "failed"
+        assert "pick on operator failed (execution): the operator could not do it: by hand" in (
+            done.message
+        )
+
+
+async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
+    async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
+        params = {"object": f.parts[0], "location": f.stations[0]}
+        wrong = {**params, "holder": "PartBox-2"}  # the gear is in PartBox-1: pre-condition
+        by_hand = Call(agent="r1", skill="pick", params=params, fallback_operator=True)
+        refused = Call(agent="r1", skill="pick", params=wrong, fallback_operator=True)
+        async with with_operator(f) as person:
+            ok = await f.executor("a").run_file(TaskFile(root=SequenceBlock(children=[by_hand])))
+            no = await f.executor("b").run_file(TaskFile(root=SequenceBlock(children=[refused])))
+        assert ok.outcome == "succeeded" and len(person.seen) == 1
+        assert no.outcome == "failed" and "(precondition)" in no.message
