@@ -209,7 +209,8 @@ def _appliance(world: mujoco.MjSpec, a: ApplianceEntry, p: WorldPlacement) -> No
     door.add_joint(
         name=f"{a.label}/door",
         type=mujoco.mjtJoint.mjJNT_HINGE,
-        axis=[0, 0, -side],  # positive angle swings the free edge out, to +x
+        # the free edge sits at -side*w from the hinge; turning about +side*z moves it to +x
+        axis=[0, 0, side],
         range=[0, a.door_open_angle],
         damping=0.5,
         armature=0.01,

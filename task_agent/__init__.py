@@ -10,8 +10,25 @@ Planning, pure core first::
     planner           unified-planning (Kairos, Fast Downward): Planner, Plan, PDDL output
     partial_order     the plan as a DAG with a schedule; balancing between robots
 
-``planner`` and ``partial_order`` import unified-planning (with numpy and scipy, ~1.5 s): their
-names here are imported on first use, so goal parsing and discovery stay quick to import.
+Hand-written tasks::
+
+    taskfile          TOML task files (sequence / parallel blocks of skill calls)
+    verify            offline verification: data flow, types, resources, pre-conditions
+
+Execution, and the Zenoh-facing parts::
+
+    discovery         live discovery: registrations + liveliness tokens
+    execution_state   steps, their graph, data flow, the goal check (pure)
+    runners           how a skill runs on an agent: over Zenoh, or in-process cores
+    steps             a step graph run on the agents: parallel, agent loss, operator fallback
+    executor          one task: plan, run, check the goal, replan; abort
+    service           the task agent: requests, registry, events (serve_tasks)
+    operator          the operator agent: skills a person answers (semi-autonomy)
+    client            TaskClient, OperatorClient
+
+``planner``, ``partial_order`` and everything that plans import unified-planning (with numpy
+and scipy, ~1.5 s); the execution and Zenoh modules import the skill layer's client and
+server. Their names here are imported on first use, so goal parsing stays quick to import.
 """
 
 from __future__ import annotations
@@ -40,6 +57,15 @@ from .goals import goal_from_conditions as goal_from_conditions
 from .goals import parse_goal as parse_goal
 
 if TYPE_CHECKING:
+    from .client import FileRefusedError as FileRefusedError
+    from .client import OperatorClient as OperatorClient
+    from .client import RemoteTaskError as RemoteTaskError
+    from .client import TaskClient as TaskClient
+    from .client import TaskTransportError as TaskTransportError
+    from .discovery import Discovery as Discovery
+    from .executor import Executor as Executor
+    from .operator import OperatorDesk as OperatorDesk
+    from .operator import serve_operator as serve_operator
     from .partial_order import Edge as Edge
     from .partial_order import PartialOrderPlan as PartialOrderPlan
     from .partial_order import ScheduledStep as ScheduledStep
@@ -49,6 +75,14 @@ if TYPE_CHECKING:
     from .planner import Planner as Planner
     from .planner import PlanStats as PlanStats
     from .planner import PlanStep as PlanStep
+    from .runners import CoreRunner as CoreRunner
+    from .runners import SkillRunner as SkillRunner
+    from .runners import ZenohRunner as ZenohRunner
+    from .service import TaskService as TaskService
+    from .service import serve_tasks as serve_tasks
+    from .taskfile import load_task_file as load_task_file
+    from .taskfile import read_task_file as read_task_file
+    from .verify import verify as verify
 
 _LAZY = {
     "Edge": "partial_order",
@@ -60,6 +94,23 @@ _LAZY = {
     "PlanStats": "planner",
     "PlanStep": "planner",
     "Planner": "planner",
+    "FileRefusedError": "client",
+    "OperatorClient": "client",
+    "RemoteTaskError": "client",
+    "TaskClient": "client",
+    "TaskTransportError": "client",
+    "Discovery": "discovery",
+    "Executor": "executor",
+    "OperatorDesk": "operator",
+    "serve_operator": "operator",
+    "CoreRunner": "runners",
+    "SkillRunner": "runners",
+    "ZenohRunner": "runners",
+    "TaskService": "service",
+    "serve_tasks": "service",
+    "load_task_file": "taskfile",
+    "read_task_file": "taskfile",
+    "verify": "verify",
 }
 
 
@@ -74,13 +125,19 @@ def __getattr__(name: str) -> Any:
 
 __all__ = [
     "AgentInfo",
+    "CoreRunner",
+    "Discovery",
     "DiscoveryError",
     "DomainError",
     "Edge",
     "Engine",
+    "Executor",
+    "FileRefusedError",
     "Goal",
     "GoalLiteral",
     "GoalParseError",
+    "OperatorClient",
+    "OperatorDesk",
     "PartialOrderPlan",
     "Plan",
     "PlanStats",
@@ -91,14 +148,25 @@ __all__ = [
     "PlanningTask",
     "PropertyGoal",
     "RelationGoal",
+    "RemoteTaskError",
     "ScheduledStep",
+    "SkillRunner",
+    "TaskClient",
     "TaskError",
+    "TaskService",
+    "TaskTransportError",
     "UnsolvableError",
     "VerificationError",
+    "ZenohRunner",
     "agents_from_view",
     "build_task",
     "check_goal",
     "goal_from_conditions",
+    "load_task_file",
     "parse_goal",
+    "read_task_file",
+    "serve_operator",
+    "serve_tasks",
     "to_partial_order",
+    "verify",
 ]

@@ -40,6 +40,7 @@ import anyio
 import msgspec
 from unified_planning.engines import PlanGenerationResultStatus as Status
 from unified_planning.environment import Environment
+from unified_planning.exceptions import UPException
 from unified_planning.io import PDDLWriter
 from unified_planning.model import (
     Fluent,
@@ -307,9 +308,19 @@ FD_SEARCH = (
 
 
 class _FastDownward(FastDownwardPDDLPlanner):  # type: ignore[misc]  # untyped
-    """Fast Downward, keeping hold of its child process: on a time-out unified-planning 1.3
-    kills the process group but neither waits for it nor closes its pipes (a zombie and two
-    unclosed files per time-out); :meth:`reap` does both."""
+    """Fast Downward with two fixes to how unified-planning 1.3 runs it.
+
+    - Its translator writes ``output.sas`` into the *caller's* working directory, so two
+      solves at once from one directory (two planners in threads, two test processes)
+      overwrite each other's file: one then fails or answers for the other problem. Here
+      the file goes next to the plan file, in the solve's own temporary directory.
+    - On a time-out unified-planning kills the process group but neither waits for it nor
+      closes its pipes (a zombie and two unclosed files per time-out); :meth:`reap` does both.
+    """
+
+    def _base_cmd(self, plan_filename: str) -> list[str]:
+        cmd: list[str] = super()._base_cmd(plan_filename)
+        return [*cmd, "--sas-file", str(Path(plan_filename).with_name("output.sas"))]
 
     @property
     def _process(self) -> Any:
@@ -384,6 +395,8 @@ class Planner:
         with self._engine() as engine:
             try:
                 result = engine.solve(problem, timeout=max(timeout, 0.001))
+            except UPException as exc:
+                raise PlanningError(f"{self.engine} failed: {exc}") from exc
             finally:
                 if isinstance(engine, _FastDownward):
                     engine.reap()

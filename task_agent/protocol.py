@@ -132,6 +132,8 @@ class VerifyProblem(Struct, frozen=True, kw_only=True):
     path: str
     kind: Literal["dataflow", "type", "resource", "precondition", "unknown", "structure"]
     message: str
+    severity: Literal["error", "warning", "note"] = "error"
+    """Only errors make a file fail verification; warnings and notes are shown."""
 
 
 # --------------------------------------------------------------------------- requests

@@ -22,17 +22,20 @@ Checks (``VerifyProblem.kind``)::
                   would refuse the second start), or use one agent whose devices for them are
                   not known
     precondition  a pre- or hold-condition false when its step starts, in the symbolic
-                  simulation; no candidate satisfying the pre-conditions for an inferred
-                  parameter; predicted effects that cannot be committed; parallel branches
-                  changing the same fact differently
+                  simulation, or made false by a parallel branch's effects (which may come
+                  first or meanwhile); no candidate satisfying the pre-conditions for an
+                  inferred parameter; predicted effects that cannot be committed; parallel
+                  branches changing the same fact differently
 
 **Symbolic simulation.** From a private copy of the world model, each step in execution order
 is specified as its agent would (:mod:`task_agent.verify_call`), its pre- and hold-conditions
 evaluated, then the effects of its post-conditions applied
 (:func:`wm_store.transactions.apply_transaction`), also after a false condition, so one
 mistake is reported once. Each branch of a parallel block starts from the state before the
-block plus its own effects; then every branch's effects are applied, in branch order, and two
-branches changing one fact differently are reported (:mod:`task_agent.verify_scene`). Steps
+block plus its own effects; then every branch's effects are applied, in branch order. Two
+branches changing one fact differently are reported (:mod:`task_agent.verify_scene`), and so is
+a call whose pre- or hold-condition turns false when a sibling branch's effects, after any of
+its steps, are applied to the state the call starts in. Steps
 whose agent or skill is unknown change nothing. Sensing is not simulated: a post-condition no
 effect makes true (``has object.pose``) is assumed, objects do not move in ``pre_sense``.
 

@@ -87,6 +87,7 @@ class Prop:
     frame: Final = "frame"
     graspPose: Final = "graspPose"
     graspWidth: Final = "graspWidth"
+    heated: Final = "heated"
     heating: Final = "heating"
     heatingPower: Final = "heatingPower"
     heatingTime: Final = "heatingTime"

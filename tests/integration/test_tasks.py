@@ -167,9 +167,10 @@ async def add_robots(wm: WmClient, robots: list[str]) -> None:
         )  # fmt: skip
 
 
-async def place_robot(wm: WmClient, name: str, station: str) -> None:
+async def place_robot(wm: WmClient, name: str, where: str) -> None:
+    """Move robot ``name`` to the location labelled ``where`` (in the world model)."""
     robot = wm.resolve_element(type="Robot", label=name)[0].id
-    target = wm.resolve_element(type="Station", label=station)[0].id
+    target = wm.resolve_element(type="Location", label=where)[0].id
     ops: list[Op] = [UnsetRelation(subject=robot, predicate="at", object=r.object)
                      for r in wm.query_relation(robot, "at")]  # fmt: skip
     await wm.transact([*ops, SetRelation(subject=robot, predicate="at", object=target)])
@@ -232,6 +233,7 @@ async def test_two_robots_kit_in_parallel(site: Site) -> None:
 
 async def test_a_failed_step_is_replanned_from_the_world_model(site: Site) -> None:
     async with site.connected() as (_, wm, client):
+        await place_robot(wm, "r1", "depot")  # it drives first: the part moves meanwhile
         task_id, events = new_task_id(), []
         gear = wm.resolve_element(type="Gear", label="gear-3")[0].id
         box1, box2 = (wm.resolve_element(type="PartBox", label=b)[0].id for b in ("box-1", "box-2"))
@@ -240,8 +242,12 @@ async def test_a_failed_step_is_replanned_from_the_world_model(site: Site) -> No
             async for event in stream:
                 events.append(event)
                 if isinstance(event, Planned) and event.attempt == 0:  # someone moves the part
-                    await wm.transact([UnsetRelation(subject=box1, predicate="contain", object=gear),
-                                       SetRelation(subject=box2, predicate="contain", object=gear)])  # fmt: skip
+                    await wm.transact(
+                        [
+                            UnsetRelation(subject=box1, predicate="contain", object=gear),
+                            SetRelation(subject=box2, predicate="contain", object=gear),
+                        ]
+                    )
         done = events[-1]
         assert isinstance(done, TaskFinished) and done.outcome == "succeeded", done
         failed = [e for e in events if isinstance(e, StepFinished) and not e.success]
@@ -256,22 +262,19 @@ async def test_a_failed_step_is_replanned_from_the_world_model(site: Site) -> No
 async def test_abort_preempts_every_run(site: Site) -> None:
     async with site.connected() as (mesh, _wm, client):
         task_id, events = new_task_id(), []
+        goal = "contain(kit-r1, gear-5) and contain(kit-r2, gear-6)"
         async with client.watch(task_id, existing=False, deadline=60) as stream:
-            await client.submit_goal(
-                "contain(kit-r1, gear-5) and contain(kit-r2, gear-6)", task_id=task_id
-            )
+            await client.submit_goal(goal, task_id=task_id)
             async for event in stream:
                 events.append(event)
-                if (
-                    isinstance(event, StepStarted)
-                    and len([e for e in events if isinstance(e, StepStarted)]) == 1
-                ):
+                running = {e.agent for e in events if isinstance(e, StepStarted)}
+                if isinstance(event, StepStarted) and running == {"r1", "r2"}:
                     assert "aborted" in await client.abort(task_id, "test abort")
         done = events[-1]
         assert isinstance(done, TaskFinished) and done.outcome == "aborted", done
         begun = [e for e in events if isinstance(e, StepStarted)]
         ended = {e.step: e for e in events if isinstance(e, StepFinished)}
-        assert begun and all(ended[e.step].reason == "preempted" for e in begun)
+        assert len(begun) == 2 and all(ended[e.step].reason == "preempted" for e in begun)
         for e in begun:  # and the agents agree
             info = await AgentClient(mesh, e.agent).status(e.run_id)
             assert info.result is not None and info.result.reason == "preempted", info
@@ -289,8 +292,11 @@ async def test_operator_answers_a_failed_step_from_the_command_line(site: Site) 
                 events: list[TaskEvent] = []
 
                 async def run() -> None:
-                    outcome.append(await client.run_goal("contain(kit-r3, gear-7)", options=options,
-                                                         on_event=events.append, deadline=60))  # fmt: skip
+                    goal = "contain(kit-r3, gear-7)"
+                    done = await client.run_goal(
+                        goal, options=options, on_event=events.append, deadline=60
+                    )
+                    outcome.append(done)
 
                 tg.start_soon(run)
                 listed = await anyio.to_thread.run_sync(

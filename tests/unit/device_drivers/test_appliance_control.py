@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import anyio
+import mujoco
 import pytest
 
 from device_drivers.drivers import SimAppliance, sim_devices
@@ -18,6 +19,7 @@ from device_drivers.world import SimWorld, WorldOptions, running_world
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 
 MEAL = Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "meal" / "scenario.toml"
+MEAL_DEPTH = next(a.size[0] for a in load_scenario(MEAL).appliances if a.label == "Microwave-1")
 
 
 @pytest.fixture
@@ -41,6 +43,17 @@ async def test_door_opens_and_closes(world: SimWorld) -> None:
     state = await oven.state()
     assert state.door_open and state.door_angle == pytest.approx(1.75, abs=0.03)
     assert seen[-1] == 1.0
+    # The open door swings out of the cavity, never into it: the door panel's centre lies in
+    # front of the housing's front face (the microwave faces +x in its own frame).
+    def panel_forward(model: Any, data: Any) -> float:
+        housing = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "Microwave-1")
+        panel = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "Microwave-1/door")
+        offset = data.geom_xpos[panel] - data.xpos[housing]
+        forward_axis = data.xmat[housing].reshape(3, 3)[:, 0]
+        return float(offset @ forward_axis)
+
+    front_face = MEAL_DEPTH / 2
+    assert await world.call(panel_forward) > front_face, "the door panel is outside the cavity"
     await oven.set_door(False)
     assert (await oven.state()).door_angle == pytest.approx(0.0, abs=0.03)
 

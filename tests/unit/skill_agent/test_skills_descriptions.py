@@ -154,3 +154,13 @@ async def test_serving_the_meal_is_plannable(wm: WmClient) -> None:
     assert skills[-1] == "serve"
     if HEATED:  # the ontology knows `heated`: the meal goes through the microwave
         assert "heat" in skills and skills.index("heat") < skills.index("serve")
+
+
+def test_entry_points_publish_the_whole_library() -> None:
+    """Every standard skill is installed under the ``skimesh.skills`` entry-point group."""
+    from importlib.metadata import entry_points
+
+    from skill_agent.skills import ALL_SKILLS
+
+    published = {ep.load() for ep in entry_points(group="skimesh.skills")}
+    assert published == set(ALL_SKILLS)

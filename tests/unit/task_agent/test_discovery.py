@@ -75,7 +75,8 @@ async def test_tokens_over_zenoh(router_endpoint: str, mesh_config: MeshConfigFa
         discovery.on_presence(lambda n, alive: changes.append((n, alive, time.perf_counter())))
         async with anyio.create_task_group() as tg:
             await tg.start(discovery.watch, watcher)
-            assert discovery.alive == {"r1", "r2"} and names(discovery) == ["r1", "r2"]
+            assert discovery.alive == frozenset({"r1", "r2"})
+            assert names(discovery) == ["r1", "r2"]
             gone = time.perf_counter()
             r1.undeclare()
             with anyio.fail_after(2):

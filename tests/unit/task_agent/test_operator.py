@@ -31,6 +31,7 @@ from task_agent.protocol import (
     Sequence as SequenceBlock,
 )
 from tests.assets.task_fleet import Fleet, fleet
+from wm_store.protocol import Value
 
 pytestmark = pytest.mark.anyio
 
@@ -128,8 +129,11 @@ async def test_an_operator_failure_fails_the_step() -> None:
 
 async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
     async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
-        params = {"object": f.parts[0], "location": f.stations[0]}
-        wrong = {**params, "holder": "PartBox-2"}  # the gear is in PartBox-1: pre-condition
+        params: dict[str, Value] = {"object": f.parts[0], "location": f.stations[0]}
+        wrong: dict[str, Value] = {
+            **params,
+            "holder": "PartBox-2",
+        }  # the gear is in PartBox-1: pre-condition
         by_hand = Call(agent="r1", skill="pick", params=params, fallback_operator=True)
         refused = Call(agent="r1", skill="pick", params=wrong, fallback_operator=True)
         async with with_operator(f) as person:

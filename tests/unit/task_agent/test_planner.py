@@ -3,6 +3,7 @@ unsolvable goals with reasons, time-outs, PDDL output, compression, the async wr
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import msgspec
@@ -146,6 +147,32 @@ def test_timeout(engine: Engine) -> None:
     with pytest.raises(PlannerTimeoutError, match=f"{engine} found no plan within 0.001 s") as info:
         Planner(engine=engine, timeout=0.001).solve(task)
     assert info.value.timeout == 0.001
+
+
+def test_concurrent_fast_downward_solves_do_not_mix(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Fast Downward's translator file goes to each solve's own directory, not the caller's
+    working directory (where concurrent solves overwrote each other's)."""
+    monkeypatch.chdir(tmp_path)
+    tasks = [kitting_task(2, 4)[1], kitting_task(3, 6, per_robot=2)[1]] * 2
+    results: list[Plan | BaseException] = []
+
+    def solve(task: PlanningTask) -> None:
+        try:
+            for _ in range(2):
+                results.append(Planner(engine="fast-downward").solve(task))
+        except BaseException as exc:  # reported below
+            results.append(exc)
+
+    threads = [threading.Thread(target=solve, args=(task,)) for task in tasks]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    assert all(isinstance(r, Plan) for r in results), results
+    assert len(results) == 8
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_fallback_to_the_full_task_when_compression_drops_too_much(
