@@ -144,6 +144,10 @@ class KeySpace:
         """Queryable of the task service."""
         return f"{self.prefix}/tasks/rpc"
 
+    def operator_rpc(self) -> str:
+        """Queryable of the operator desk (pending requests a person answers)."""
+        return f"{self.prefix}/operator/rpc"
+
     def task_events(self, task: str) -> str:
         """Event stream of one task."""
         return f"{self.prefix}/tasks/{check_name(task, 'task id')}/events"

@@ -13,6 +13,9 @@ Example (``configs/agents/pick.toml``)::
     type = "Gripper"
     label = "r1-gripper"
 
+    [hardware]                       # shared devices bound to hardware parameters, by label
+    sensor = "Camera-1"              # e.g. a fixed overhead camera several robots use
+
     [skills]
     paths = ["my_pkg.skills:Pick", "my_pkg.more_skills", "../skills/place.py"]
     entry_points = ["noop"]          # names in the entry-point group skimesh.skills; "*" = all
@@ -128,6 +131,10 @@ class AgentConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fiel
     agent_type: str = "RobotAgent"
     robot: RobotConfig = RobotConfig()
     devices: list[DeviceConfig] = []
+    hardware: dict[str, str] = {}
+    """Hardware parameter name -> world-model label of the device bound to it: devices that
+    are not parts of the robot (a fixed overhead camera, a smart platform) offered to this
+    agent's skills. A bound parameter always gets that device (see ``skill_agent.params``)."""
     skills: SkillsConfig = SkillsConfig()
     services: list[ServiceSkillConfig] = []
     conditions: list[str] = []
@@ -149,6 +156,16 @@ class AgentConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fiel
         dup = sorted({label for label in labels if labels.count(label) > 1})
         if dup:
             raise ValueError(f"device labels must be unique; repeated: {', '.join(dup)}")
+        empty = sorted(name for name, label in self.hardware.items() if not name or not label)
+        if empty:
+            raise ValueError(f"hardware bindings need a parameter name and a device label: {empty}")
+
+    @property
+    def device_labels(self) -> list[str]:
+        """Labels of every device this agent drives: its machine (an appliance is its own
+        device), its devices and the devices of its hardware bindings, without repeats."""
+        labels = [self.robot_label, *(d.label for d in self.devices), *self.hardware.values()]
+        return list(dict.fromkeys(labels))
 
     @property
     def robot_label(self) -> str:

@@ -19,7 +19,13 @@ of the three sizes).
   -> UnspecifiedParameterError (never a crash later, SkiROS2 #91);
 - a missing hardware parameter takes the device ``hardware[name]``, else this agent's device
   of that class (the ``hardware`` values and the robot's ``hasA`` parts; several -> the first
-  by id, and the reason says so);
+  by id, and the reason says so); an *optional* one takes ``hardware[name]``, else this
+  agent's one device of that class, else stays None (several: None, it is optional; given
+  as None: stays None);
+- a hardware parameter the agent binds (``hardware[name]``, from its configuration) always
+  gets that device: a request naming another device *of this agent* for it (a planner binds
+  the robot's own camera, not knowing the agent's configuration) is answered with the bound
+  device, and ``inferred`` says so; a device of another agent is still refused;
 - a missing element parameter is inferred (:mod:`skill_agent.inference`), afresh on every
   call; ``Specified.inferred`` holds the reason for each value chosen automatically.
 """
@@ -196,6 +202,47 @@ def _pick_device(
     )
 
 
+def _none(given: Mapping[str, Value], spec: ParamSpec) -> bool:
+    """Whether the request sets ``spec`` to None on purpose (and it has no default)."""
+    return spec.name in given and given[spec.name] is None and spec.default is None
+
+
+def _hardware_value(
+    desc: SkillDescription,
+    spec: ParamSpec,
+    value: Value,
+    view: WorldView,
+    hardware: Mapping[str, str],
+    devices: list[str],
+    robot: str | None,
+) -> tuple[Value, str]:
+    """The device of hardware parameter ``spec`` (given ``value`` or None) and, when the agent
+    chose it, why (see the module doc)."""
+    known = devices if robot else []  # ``hardware`` alone does not list every device
+    bound = hardware.get(spec.name)
+    if value is not None:
+        checked = _check_element(desc, spec, value, view, known)
+        if bound is None or bound == checked or checked not in devices:
+            return checked, ""
+        device = _check_element(desc, spec, bound, view, [])
+        return device, (
+            f"{device}: this agent's '{spec.name}' device, bound by its configuration "
+            f"({checked} was asked for)"
+        )
+    if bound is not None:
+        device = _check_element(desc, spec, bound, view, [])
+        return device, f"{device}: this agent's '{spec.name}' device"
+    if not spec.optional:
+        return _pick_device(desc, spec, view, devices, robot)
+    fitting = [d for d in devices if _is(view, d, spec.type)]
+    if spec.partial is not None:
+        allowed = set(matching(view, spec))
+        fitting = [d for d in fitting if d in allowed]
+    if len(fitting) == 1:
+        return fitting[0], f"{fitting[0]}: this agent's only {spec.type} (optional)"
+    return None, ""
+
+
 def specify(
     desc: SkillDescription,
     given: Mapping[str, Value],
@@ -227,7 +274,12 @@ def specify(
         value = given.get(spec.name)
         value = spec.default if value is None else value
         element = not is_value_kind(spec.type)
-        if value is not None and element:
+        if element and spec.kind == "hardware" and not (spec.optional and _none(given, spec)):
+            device, why = _hardware_value(desc, spec, value, view, hardware, devices, robot)
+            values[spec.name] = device
+            if why:
+                inferred[spec.name] = why
+        elif value is not None and element:
             values[spec.name] = _check_element(desc, spec, value, view, known_devices)
         elif value is not None:
             values[spec.name] = check_kind(spec, value)
@@ -238,14 +290,6 @@ def specify(
                 f"parameter '{spec.name}' ({spec.type}) of skill '{desc.name}' is required and "
                 "has no default; give it in the start request's params"
             )
-        elif spec.kind == "hardware":
-            if spec.name in hardware:
-                values[spec.name] = _check_element(desc, spec, hardware[spec.name], view, [])
-                inferred[spec.name] = f"{hardware[spec.name]}: this agent's '{spec.name}' device"
-            else:
-                values[spec.name], inferred[spec.name] = _pick_device(
-                    desc, spec, view, devices, robot
-                )
         else:
             values[spec.name] = None
             pending.append(spec)

@@ -22,7 +22,9 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   closed containers (a meal box) a ``graspPose`` from the side facing the robot in the
   scenario layout (their -x face), so they can go into an appliance's cavity.
 - **Sizes**: furniture and containers ``SizeCuboid`` (outside extents), parts by shape;
-  **masses**; appliances ``doorOpen = false``, ``heating = false``, ``heatingPower``.
+  **masses**; appliances ``doorOpen = false``, ``heating = false``, ``heatingPower``;
+  containers the ``capacity`` of their class's default individual in the ontology (KitBox 6,
+  Tray 2), so "not full" pre-conditions count against it.
 - **at** (symbolic locations for the planner): every furniture, appliance and open container
   (not closed, not on a robot) is ``at`` its station (through the furniture it stands on), else
   ``at`` the home of a robot whose arm reaches it from its start pose, else nowhere. Closed
@@ -32,7 +34,8 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   alone with their pose; a smart platform is the furniture element itself (same label, class
   ``SmartPlatform``).
 
-Pure: no I/O. With ``existing`` (label -> element id of elements already in the world model,
+Pure: no I/O (the ontology, default :meth:`Ontology.default`, is loaded once per process).
+With ``existing`` (label -> element id of elements already in the world model,
 e.g. robots registered by their agents first), those elements are not added again: their
 pose is updated and relations point at them.
 """
@@ -50,6 +53,8 @@ from device_drivers.scenario import (
     RobotEntry,
     Scenario,
 )
+from wm_store.errors import WmError
+from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
     Op,
@@ -81,6 +86,7 @@ __all__ = [
     "door_label",
     "home_label",
     "scenario_ops",
+    "template_capacity",
 ]
 
 REACH_FRACTION = 0.8
@@ -169,9 +175,22 @@ def _near_point(footprint: tuple[float, float, float, float, float], x: float, y
     return math.hypot(max(abs(lx) - hx, 0.0), max(abs(ly) - hy, 0.0))
 
 
+def template_capacity(ontology: Ontology, cls: str) -> int | None:
+    """The ``capacity`` of the nearest default individual of ``cls`` or a superclass that
+    sets one (KitBox: 6), else None."""
+    for name in ontology.superclasses(cls) if cls in ontology.classes else ():
+        try:
+            capacity = ontology.template(name).properties.get(Prop.capacity)
+        except WmError:  # no (single) default individual of this class
+            continue
+        if isinstance(capacity, int) and not isinstance(capacity, bool):
+            return capacity
+    return None
+
+
 class _Builder:
-    def __init__(self, s: Scenario, existing: Mapping[str, str]) -> None:
-        self.s, self.existing = s, existing
+    def __init__(self, s: Scenario, existing: Mapping[str, str], ontology: Ontology) -> None:
+        self.s, self.existing, self.ontology = s, existing, ontology
         self.ops: list[Op] = []
         self.placed: dict[str, WorldPlacement] = resolve_placements(s)
         self.furniture = {f.label: f for f in s.furniture}
@@ -245,6 +264,9 @@ class _Builder:
             Prop.size: SizeCuboid(x=c.size[0], y=c.size[1], z=c.size[2]),
             Prop.mass: c.mass,
         }
+        capacity = template_capacity(self.ontology, c.type)
+        if capacity is not None:
+            props[Prop.capacity] = capacity
         if c.closed and c.size[1] <= SIDE_GRASP_MAX_WIDTH:
             props[Prop.graspPose] = _side_grasp(c.size[0], c.size[2])
         self.add(c.type, c.label, props, c.parent)
@@ -341,8 +363,15 @@ class _Builder:
 _DEVICES = (("arm", Cls.Arm), ("gripper", Cls.Gripper), ("base", Cls.MobileBase))
 
 
-def scenario_ops(scenario: Scenario, existing: Mapping[str, str] | None = None) -> list[Op]:
+def scenario_ops(
+    scenario: Scenario,
+    existing: Mapping[str, str] | None = None,
+    *,
+    ontology: Ontology | None = None,
+) -> list[Op]:
     """The ops of one transaction that put ``scenario``'s initial scene into the world model
     (see the module doc). Refs are ``$<label>``: ``reply.ids["$Gear-1"]`` is Gear-1's id.
-    ``existing``: label -> id of elements already there (updated, not added again)."""
-    return _Builder(scenario, existing or {}).build()
+    ``existing``: label -> id of elements already there (updated, not added again).
+    ``ontology``: where container capacities come from (default: the core ontology)."""
+    onto = ontology if ontology is not None else Ontology.default()
+    return _Builder(scenario, existing or {}, onto).build()

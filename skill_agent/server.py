@@ -17,15 +17,19 @@ no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
 
 Start-up order: core running -> queryables -> token -> registration in the world model (agent,
 robot, devices, skills: :meth:`WmClient.register_robot`; the presence monitor of the store then
-keeps ``available`` equal to the token). Stop (cancellation): every run is preempted and its
-result published, then, shielded, the agent unregisters and the token is undeclared.
+keeps ``available`` equal to the token) -> wiring: the drivers given (by label: in-process
+drivers of a simulated world, or Zenoh proxies from
+:func:`~device_drivers.remote_client.connect_devices`) are bound to the elements of the
+registered robot and devices, and the configuration's ``[hardware]`` bindings to theirs
+(:mod:`skill_agent.wiring`). Stop (cancellation): every run is preempted and its result
+published, then, shielded, the agent unregisters and the token is undeclared.
 """
 
 from __future__ import annotations
 
 import logging
 import socket
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 
 import anyio
@@ -72,6 +76,7 @@ from .protocol import (
     encode,
 )
 from .simulated import SimulatedOutcomes
+from .wiring import bind_devices, bind_hardware
 
 __all__ = [
     "AgentService",
@@ -247,11 +252,21 @@ def agent_registration(
     )
 
 
-async def _register(wm: WmClient, core: AgentCore, config: AgentConfig, address: str) -> None:
+async def _register(
+    wm: WmClient,
+    core: AgentCore,
+    config: AgentConfig,
+    address: str,
+    drivers: Mapping[str, object] | None,
+) -> None:
     await wm.register_robot(agent_registration(config, core.descriptions(), address=address))
     agents = wm.resolve_element(type="Agent", label=config.name)
     controlled = [r.object for a in agents for r in wm.query_relation(a.id, "controls")]
     core.robot = controlled[0] if controlled else None  # its hasA devices are the hardware
+    if drivers is not None:  # in place: the runs' environment holds this very dict
+        core.devices.clear()
+        core.devices.update(bind_devices(wm, config.device_labels, drivers, robot=core.robot))
+    core.hardware.update(bind_hardware(wm, config.hardware, robot=core.robot))
 
 
 async def serve_agent(
@@ -261,20 +276,23 @@ async def serve_agent(
     config: AgentConfig,
     wm: WmClient,
     registry: SkillRegistry | None = None,
+    drivers: Mapping[str, object] | None = None,
     unregister_timeout: float = 5.0,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Run ``core`` and serve it on ``mesh`` until cancelled (see the module docstring);
-    ``started`` once the agent is registered and reachable.
+    ``started`` once the agent is registered, wired and reachable. ``drivers``: device
+    drivers by world-model label; given, they replace ``core.devices`` (bound by label).
 
     Raises:
         WmError: the registration was refused or the store is unreachable.
+        WiringError: a device label of the configuration names no element or several.
     """
     keys, name = mesh.keys, core.name
     address = keys.agent(name)
 
     async def reregister() -> None:
-        await _register(wm, core, config, address)
+        await _register(wm, core, config, address, drivers)
 
     service = AgentService(core, registry=registry, on_reload=reregister)
 
@@ -339,14 +357,18 @@ async def run_agent(
     config: AgentConfig,
     *,
     simulate: bool = False,
+    drivers: Mapping[str, object] | None = None,
     wm_timeout: float = 5.0,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Everything ``skimesh agent`` does: join the world model, load and check the skills,
     build the core and serve it until cancelled. ``simulate`` forces simulated outcomes.
+    ``drivers``: device drivers by world-model label (``driver.name``), bound to the agent's
+    devices and hardware bindings by label (see the module doc); None: no drivers.
 
     Raises:
-        SkillLoadError: a skill or the config does not load. WmError: no world model.
+        SkillLoadError: a skill or the config does not load (WiringError: a device label
+            names no element). WmError: no world model.
     """
     ontology = await anyio.to_thread.run_sync(_ontology, config)
     transport = ZenohTransport(mesh)
@@ -366,5 +388,11 @@ async def run_agent(
                 registry=registry.conditions,
             )
             await serve_agent(
-                mesh, core, config=config, wm=wm, registry=registry, task_status=task_status
+                mesh,
+                core,
+                config=config,
+                wm=wm,
+                registry=registry,
+                drivers=drivers,
+                task_status=task_status,
             )

@@ -33,7 +33,13 @@ import msgspec
 from meshlink import KeySpace, Mesh, MeshlinkError, NoReplyError, RemoteError, Sample
 from meshlink.subscription import Subscription
 
-from .errors import TaskError, VerificationError, error_for_code
+from .errors import (
+    FileRefusedError,
+    RemoteTaskError,
+    TaskError,
+    TaskTransportError,
+    error_for_code,
+)
 from .goals import Goal
 from .protocol import (
     AbortTask,
@@ -57,7 +63,6 @@ from .protocol import (
     TasksReply,
     TaskStatus,
     VerifyFile,
-    VerifyProblem,
     VerifyReply,
     decode_event,
     decode_operator_reply,
@@ -82,32 +87,9 @@ EventCallback = Callable[[TaskEvent], object]
 _error_decoder = msgspec.msgpack.Decoder(ErrorReply)
 
 
-class RemoteTaskError(TaskError):
-    """An error reply whose code has no class here; ``code`` is the wire code."""
-
-    def __init__(self, code: str, message: str) -> None:
-        super().__init__(message)
-        self.code = code
-
-
-class TaskTransportError(TaskError):
-    """The task agent cannot be reached, stopped answering, or sent garbage."""
-
-    code = "transport"
-
-
-class FileRefusedError(VerificationError):
-    """A submitted task file failed verification; ``problems`` says why."""
-
-    def __init__(self, problems: list[VerifyProblem]) -> None:
-        lines = "; ".join(f"{p.path or '-'} [{p.kind}] {p.message}" for p in problems)
-        super().__init__(f"the task file does not verify ({len(problems)} problems): {lines}")
-        self.problems = problems
-
-
 def operator_rpc_key(keys: KeySpace) -> str:
-    """``skimesh/<mesh>/operator/rpc`` (to move into :class:`meshlink.KeySpace`)."""
-    return f"{keys.prefix}/operator/rpc"
+    """``skimesh/<mesh>/operator/rpc``."""
+    return keys.operator_rpc()
 
 
 def new_task_id() -> str:

@@ -15,8 +15,14 @@ Hierarchy::
     │   │                        (``reason``; ``unreachable``: the goal facts no sequence of
     │   │                        skills can make true, when the analysis can tell)
     │   └── PlannerTimeoutError  the planner ran out of time
-    └── VerificationError        a task structure fails its checks (data flow, types,
-                                 resources, pre-condition chain)
+    ├── VerificationError        a task structure fails its checks (data flow, types,
+    │   │                        resources, pre-condition chain)
+    │   └── FileRefusedError     a submitted task file did not verify (``problems``)
+    ├── RequestError             the task service refused a request (``code``: unknown_task,
+    │                            task_exists, bad_request, unknown_request, ...)
+    ├── RemoteTaskError          an error reply whose code has no class here (keeps ``code``)
+    └── TaskTransportError       the task agent cannot be reached, stopped answering, or sent
+                                 garbage
 
 Each class has a stable ``code`` for the wire (the task service's error replies).
 """
@@ -24,14 +30,22 @@ Each class has a stable ``code`` for the wire (the task service's error replies)
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .protocol import VerifyProblem
 
 __all__ = [
     "DiscoveryError",
     "DomainError",
+    "FileRefusedError",
     "GoalParseError",
     "PlannerTimeoutError",
     "PlanningError",
+    "RemoteTaskError",
+    "RequestError",
     "TaskError",
+    "TaskTransportError",
     "UnsolvableError",
     "VerificationError",
     "error_for_code",
@@ -108,3 +122,34 @@ _BY_CODE: dict[str, type[TaskError]] = {
 def error_for_code(code: str) -> type[TaskError]:
     """The class for a wire ``code`` (:class:`TaskError` for an unknown one)."""
     return _BY_CODE.get(code, TaskError)
+
+
+class FileRefusedError(VerificationError):
+    """A submitted task file failed verification; ``problems`` says why."""
+
+    def __init__(self, problems: Sequence[VerifyProblem]) -> None:
+        lines = "; ".join(f"{p.path or '-'} [{p.kind}] {p.message}" for p in problems)
+        super().__init__(f"the task file does not verify ({len(problems)} problems): {lines}")
+        self.problems = list(problems)
+
+
+class RequestError(TaskError):
+    """A refused request, with its wire ``code`` (``unknown_task``, ``task_exists``, ...)."""
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+class RemoteTaskError(TaskError):
+    """An error reply whose code has no class here; ``code`` is the wire code."""
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+class TaskTransportError(TaskError):
+    """The task agent cannot be reached, stopped answering, or sent garbage."""
+
+    code = "transport"

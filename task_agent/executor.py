@@ -96,6 +96,7 @@ class Executor:
         planner: PlanSource | None = None,
         operator_agent: str = "operator",
         wm_timeout: float = 5.0,
+        agent_wait: float = 5.0,
     ) -> None:
         self.task_id = task_id
         self.wm = wm
@@ -103,6 +104,9 @@ class Executor:
         self.options = options or TaskOptions()
         self.planner = planner
         self.wm_timeout = wm_timeout
+        self.agent_wait = agent_wait
+        """Seconds to wait for an agent when none is available (a router restart makes every
+        liveliness token vanish for a few seconds)."""
         self.events = EventSink(task_id, publish)
         self.steps = StepScheduler(
             events=self.events,
@@ -195,7 +199,7 @@ class Executor:
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
         if self.planner is None:
-            raise DomainError("this executor has no planner: it can only run task files")
+            return "failed", "this executor has no planner: it can only run task files"
         excluded: set[tuple[str, str]] = set()
         attempt = 0
         while True:
@@ -229,6 +233,9 @@ class Executor:
     ) -> list[StepSpec]:
         assert self.planner is not None
         await self._catch_up()
+        with anyio.move_on_after(self.agent_wait):
+            while not self.discovery.agents():
+                await self.discovery.wait_changed()
         started = time.perf_counter()
         try:
             plan = await self.planner.plan(self._agents(excluded), self.wm, goal)

@@ -48,20 +48,24 @@ class SkillRunner(Protocol):
 
 
 class ZenohRunner:
-    """Runs skills on agents over ``mesh``. ``alive(agent)``, when given, says whether an agent's
-    token is still there: a vanished agent is not asked to stop (nobody would answer)."""
+    """Runs skills on agents over ``mesh``. ``start_timeout``: the wait for a start's answer,
+    which comes after the agent's pre-sensing and pre-condition check. ``alive(agent)``, when
+    given, says whether an agent's token is still there: a vanished agent is not asked to stop
+    (nobody would answer)."""
 
     def __init__(
         self,
         mesh: Mesh,
         *,
         timeout: float = 5.0,
+        start_timeout: float = 60.0,
         lost_grace: float = 1.0,
         stop_timeout: float = 10.0,
         alive: Callable[[str], bool] | None = None,
     ) -> None:
         self.mesh = mesh
         self.timeout = timeout
+        self.start_timeout = start_timeout
         self.lost_grace = lost_grace
         self.stop_timeout = stop_timeout
         self.alive = alive
@@ -74,12 +78,18 @@ class ZenohRunner:
         async with client.watch(request.run_id) as events:
             try:
                 try:
-                    started = await client.request(request)
+                    started = await client.start(
+                        request.skill,
+                        request.params,
+                        run_id=request.run_id,
+                        timeout=request.timeout,
+                        simulate=request.simulate,
+                        author=request.author,
+                        request_timeout=self.start_timeout,
+                    )
                 except SkillError as e:
                     ended = not isinstance(e, AgentTransportError)  # refused: nothing to stop
                     raise
-                if not isinstance(started, RunStarted):
-                    raise AgentTransportError(f"agent {agent!r} answered a start with {started}")
                 on_started(started)
                 async for event in events:
                     if isinstance(event, RunResult):

@@ -43,7 +43,7 @@ from meshlink.keys import check_name
 from wm_store import WmClient
 
 from .discovery import Discovery
-from .errors import TaskError, VerificationError
+from .errors import RequestError, TaskError, VerificationError
 from .execution_state import WorldModel
 from .executor import Executor, PlanSource
 from .goals import check_goal, parse_goal
@@ -80,14 +80,6 @@ __all__ = ["RequestError", "TaskService", "serve_tasks"]
 
 _log = logging.getLogger(__name__)
 PlannerFactory = Callable[[TaskOptions], PlanSource]
-
-
-class RequestError(TaskError):
-    """A refused request, with its wire ``code`` (``unknown_task``, ``task_exists``, ...)."""
-
-    def __init__(self, code: str, message: str) -> None:
-        super().__init__(message)
-        self.code = code
 
 
 def default_planners() -> PlannerFactory:

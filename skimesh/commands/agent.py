@@ -21,7 +21,7 @@ from pathlib import Path
 import anyio
 import msgspec
 
-from meshlink import MeshlinkError, add_mesh_arguments
+from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.config import AgentConfig, load_config
 from skill_agent.errors import AgentTransportError, SkillError
@@ -32,7 +32,6 @@ from wm_store.ontology_model import TYPED_KINDS
 from wm_store.protocol import Value
 
 from ..connect import mesh_session
-from ..paths import configs_dir
 from ..runtime import run_service
 
 __all__ = ["add_parser", "parse_params", "scenario_config_path"]
@@ -55,9 +54,20 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     p.add_argument("--zenoh-config", dest="zenoh_config", metavar="FILE", help="Zenoh JSON5 file")
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--config", dest="agent_config", metavar="FILE", help="agent config (TOML)")
-    where.add_argument("--scenario", help="with --robot: configs/scenarios/S/agents/R.toml")
-    p.add_argument("--robot", help="the robot (agent config) of --scenario")
+    where.add_argument(
+        "--scenario",
+        help="with --robot: the agent config the scenario names for that robot or appliance "
+        "(a scenario name under configs/scenarios or a scenario file)",
+    )
+    p.add_argument("--robot", help="the robot or appliance (or agent name) of --scenario")
     p.add_argument("--simulate", action="store_true", help="simulated-outcome mode (no hardware)")
+    p.add_argument(
+        "--devices",
+        choices=("zenoh", "none"),
+        help="device drivers: 'zenoh' proxies of the devices `skimesh sim` (or real hardware) "
+        "serves on the mesh, bound by label (default); 'none' (default with --simulate)",
+    )
+    p.add_argument("--device-timeout", type=float, default=2.0, help="wait for device servers (s)")
     p.add_argument("--timeout", type=float, default=5.0, help="world-model request timeout (s)")
     p.set_defaults(func=_serve)
 
@@ -111,14 +121,28 @@ def _client_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def scenario_config_path(scenario: str, robot: str) -> Path:
-    """``configs/scenarios/<scenario>/agents/<robot>.toml``, or FileNotFoundError listing
-    what exists."""
-    folder = configs_dir() / "scenarios" / scenario / "agents"
-    path = folder / f"{robot}.toml"
-    if not path.is_file():
-        have = sorted(p.stem for p in folder.glob("*.toml")) if folder.is_dir() else []
-        raise FileNotFoundError(f"no agent config {path}; robots of {scenario!r}: {have or 'none'}")
-    return path
+    """The agent config the scenario file names for ``robot`` (a robot name, an appliance
+    label, or the name inside one of its agent configs: ``Scenario.agents``), or
+    FileNotFoundError listing what the scenario has."""
+    from device_drivers.errors import ScenarioError
+    from device_drivers.scenario_load import load_scenario
+
+    from .sim import scenario_file
+
+    try:
+        agents = load_scenario(scenario_file(scenario)).agents
+    except ScenarioError as e:
+        raise FileNotFoundError(str(e)) from None
+    if robot in agents:
+        return Path(agents[robot])
+    for owner, path in agents.items():
+        try:
+            if load_config(path).name == robot:
+                return Path(path)
+        except SkillError as e:
+            _log.warning("agent config of %s: %s", owner, e)
+    names = ", ".join(sorted(agents)) or "none"
+    raise FileNotFoundError(f"scenario {scenario!r} names no agent for {robot!r}; it has: {names}")
 
 
 def _load(args: argparse.Namespace) -> AgentConfig:
@@ -136,10 +160,17 @@ def _serve(args: argparse.Namespace) -> int:
         print(f"skimesh agent: {e}", file=sys.stderr)
         return EXIT_REFUSED
 
+    remote = (args.devices or ("none" if args.simulate else "zenoh")) == "zenoh"
+
     async def main() -> int:
         try:
             async with mesh_session(args) as mesh:
-                await run_agent(mesh, config, simulate=args.simulate, wm_timeout=args.timeout)
+                drivers = (
+                    await _remote_drivers(mesh, config, args.device_timeout) if remote else None
+                )
+                await run_agent(
+                    mesh, config, simulate=args.simulate, drivers=drivers, wm_timeout=args.timeout
+                )
         except SkillError as e:
             print(f"skimesh agent {config.name}: {e}", file=sys.stderr)
             return EXIT_REFUSED
@@ -149,6 +180,25 @@ def _serve(args: argparse.Namespace) -> int:
         return 0
 
     return run_service(main)
+
+
+async def _remote_drivers(mesh: Mesh, config: AgentConfig, timeout: float) -> dict[str, object]:
+    """Zenoh proxies of the devices served on the mesh, by label (those this agent uses)."""
+    from device_drivers.remote_client import connect_devices
+
+    found = {d.name: d for d in (await connect_devices(mesh, timeout=timeout)).values()}
+    mine: dict[str, object] = {
+        label: found[label] for label in config.device_labels if label in found
+    }
+    missing = [d.label for d in config.devices if d.label not in found]
+    if missing:
+        _log.warning(
+            "agent %s: no device server answered for %s (is `skimesh sim` running?); skills "
+            "that need them will fail",
+            config.name,
+            ", ".join(missing),
+        )
+    return mine
 
 
 # --------------------------------------------------------------------------- clients

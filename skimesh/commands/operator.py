@@ -133,32 +133,42 @@ async def _list(
 
 
 async def _interactive(client: OperatorClient, wakeups: Subscription[Sample]) -> int:
-    asked: set[str] = set()
-    async with _stdin_lines() as lines:
-        print("waiting for requests (answer s[uccess] or f[ailure] [message]; Ctrl-D ends)")
-        while True:
-            new = [s for s in await client.pending() if s.id not in asked]
-            if not new:
-                await _changed(wakeups, 2.0)
+    """Show requests as they come; each input line answers one: ``s|f [ID] [message]``
+    (without an ID: the oldest request). End of input (Ctrl-D) ends."""
+    print("answer with: s[uccess] or f[ailure], optionally the request id, then a message")
+    async with _stdin_lines() as lines, anyio.create_task_group() as tg:
+        tg.start_soon(_show_requests, client, wakeups)
+        while line := (await lines.readline()).decode():
+            words = line.split()
+            if not words:
                 continue
-            for step in new:
-                asked.add(step.id)
-                print(_line(step))
-                while True:
-                    print(f"answer request {step.id}: ", end="", flush=True)
-                    text = await lines.readline()
-                    if not text:
-                        return 0
-                    word, _, message = text.decode().strip().partition(" ")
-                    if word.lower() in VERDICTS:
-                        break
-                    print("  type s (success) or f (failure), optionally followed by a message")
-                try:
-                    print(
-                        "  " + await client.answer(step.id, VERDICTS[word.lower()], message, "cli")
-                    )
-                except TaskError as e:  # withdrawn meanwhile (the task was aborted)
-                    print(f"  {e}")
+            if words[0].lower() not in VERDICTS:
+                print("  type s (success) or f (failure), then optionally the id and a message")
+                continue
+            pending = [s.id for s in await client.pending()]
+            chosen = words[1] if len(words) > 1 and words[1] in pending else ""
+            request_id = chosen or (pending[0] if pending else "")
+            if not request_id:
+                print("  no request is waiting")
+                continue
+            message = " ".join(words[2:] if chosen else words[1:])
+            try:
+                verdict = VERDICTS[words[0].lower()]
+                print("  " + await client.answer(request_id, verdict, message, "cli"))
+            except TaskError as e:  # withdrawn meanwhile (the task was aborted)
+                print(f"  {e}")
+        tg.cancel_scope.cancel()
+    return 0
+
+
+async def _show_requests(client: OperatorClient, wakeups: Subscription[Sample]) -> None:
+    shown: set[str] = set()
+    while True:
+        for step in await client.pending():
+            if step.id not in shown:
+                shown.add(step.id)
+                print(_line(step), flush=True)
+        await _changed(wakeups, 2.0)
 
 
 @asynccontextmanager

@@ -98,7 +98,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "--operator-fallback", action="store_true", help="ask the operator when a step fails"
     )
     submit.add_argument("--detach", action="store_true", help="print the task id and return")
-    submit.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
+    _follow_arguments(submit)
     _client_arguments(submit)
     submit.set_defaults(func=lambda a: _client(a, _submit))
 
@@ -120,7 +120,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
 
     watch = cmds.add_parser("watch", help="follow a running task (exit codes as for submit)")
     watch.add_argument("task_id")
-    watch.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
+    _follow_arguments(watch)
     _client_arguments(watch)
     watch.set_defaults(func=lambda a: _client(a, _watch))
 
@@ -130,6 +130,11 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     verify.set_defaults(func=lambda a: _client(a, _verify))
 
     operator_command.add_parser(sub)
+
+
+def _follow_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
+    p.add_argument("--no-progress", action="store_true", help="no StepProgress lines")
 
 
 def _client_arguments(p: argparse.ArgumentParser) -> None:
@@ -332,7 +337,8 @@ async def _submit(args: argparse.Namespace) -> int:
 async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) -> int:
     show: Callable[[TaskEvent], None] = _print_json if args.json else ProgressPrinter()
     async for event in events:
-        show(event)
+        if not (args.no_progress and isinstance(event, StepProgress)):
+            show(event)
         if isinstance(event, TaskFinished):
             return EXIT_CODES.get(event.outcome, EXIT_ERROR)
     return EXIT_ERROR  # pragma: no cover - the stream ends with TaskFinished

@@ -27,6 +27,7 @@ def test_every_builder_produces_the_documented_key() -> None:
     assert k.device_cmd("r1", "gripper") == "skimesh/lab/devices/r1/gripper/cmd"
     assert k.devices() == "skimesh/lab/devices/**"
     assert k.tasks_rpc() == "skimesh/lab/tasks/rpc"
+    assert k.operator_rpc() == "skimesh/lab/operator/rpc"
     assert k.task_events("t.42") == "skimesh/lab/tasks/t.42/events"
 
 

@@ -138,7 +138,8 @@ def test_probabilities_must_name_loaded_skills() -> None:
 
 
 def test_scenario_configs_map_to_their_path() -> None:
-    with pytest.raises(FileNotFoundError, match=r"scenarios/nope/agents/r1\.toml.*'nope': none"):
+    assert scenario_config_path("kitting", "r2").parts[-2:] == ("kitting", "r2.toml")
+    with pytest.raises(FileNotFoundError, match=r"scenarios/nope/scenario\.toml"):
         scenario_config_path("nope", "r1")
 
 

@@ -26,6 +26,7 @@ from task_agent.protocol import (
     Sequence as SequenceBlock,
 )
 from tests.assets.task_fleet import Fleet, fleet
+from tests.conftest import SlowSteps
 
 pytestmark = pytest.mark.anyio
 
@@ -52,9 +53,13 @@ def check_stream(events: Sequence[TaskEvent]) -> TaskFinished:
     return events[-1]
 
 
-async def test_independent_steps_run_in_parallel_on_two_robots() -> None:
+async def test_independent_steps_run_in_parallel_on_two_robots(
+    blocking_detector: SlowSteps,
+) -> None:
     async with fleet(time_scale=0.02) as f:
-        done = await f.executor().run_goal(parse_goal(f.kit_goal(0, 1), f.wm))
+        goal = parse_goal(f.kit_goal(0, 1), f.wm)
+        blocking_detector.reports.clear()  # setting the fleet up is not under test
+        done = await f.executor().run_goal(goal)
         assert done.outcome == "succeeded", done.message
         assert check_stream(f.events) is done
         plan = f.of(Planned)[0]
@@ -68,6 +73,7 @@ async def test_independent_steps_run_in_parallel_on_two_robots() -> None:
         assert max(a0, b0) < min(a1, b1), "r1's and r2's first steps do not overlap"
         assert unmet_goal(parse_goal(f.kit_goal(0, 1), f.wm), f.wm) == []
         assert done.steps_run == 6 and done.replans == 0
+        assert not blocking_detector.reports, "planning or execution blocked the event loop"
 
 
 async def test_a_failing_skill_is_replanned_around() -> None:

@@ -7,7 +7,10 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 import anyio
+import msgspec
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from skill_agent.core import AgentCore
 from task_agent.execution_state import OPERATOR_NOTE
@@ -32,8 +35,6 @@ from task_agent.protocol import (
 )
 from tests.assets.task_fleet import Fleet, fleet
 from wm_store.protocol import Value
-
-pytestmark = pytest.mark.anyio
 
 
 class Person:
@@ -75,6 +76,7 @@ async def with_operator(f: Fleet, *, success: bool = True) -> AsyncIterator[Pers
         tg.cancel_scope.cancel()
 
 
+@pytest.mark.anyio
 async def test_desk_requests_are_listed_answered_and_withdrawn() -> None:
     desk = OperatorDesk()
     service = OperatorService("operator", desk)
@@ -87,6 +89,7 @@ async def test_desk_requests_are_listed_answered_and_withdrawn() -> None:
         desk.answer("1", True)
 
 
+@pytest.mark.anyio
 async def test_mirror_offers_the_robots_skills_with_a_note_and_no_time_limit() -> None:
     async with fleet() as f:
         mirror = SkillMirror(f.discovery, OperatorDesk())
@@ -97,6 +100,7 @@ async def test_mirror_offers_the_robots_skills_with_a_note_and_no_time_limit() -
         assert pick.pre == f.discovery.agents()[0].skill("pick").pre  # type: ignore[union-attr]
 
 
+@pytest.mark.anyio
 async def test_a_failed_step_is_done_by_the_operator() -> None:
     async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
         goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
@@ -116,6 +120,7 @@ async def test_a_failed_step_is_done_by_the_operator() -> None:
         assert f.wm.query_relation(f.kits[0], "contain", f.parts[0])
 
 
+@pytest.mark.anyio
 async def test_an_operator_failure_fails_the_step() -> None:
     async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
         goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
@@ -127,6 +132,7 @@ async def test_an_operator_failure_fails_the_step() -> None:
         )
 
 
+@pytest.mark.anyio
 async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
     async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
         params: dict[str, Value] = {"object": f.parts[0], "location": f.stations[0]}
@@ -141,3 +147,23 @@ async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
             no = await f.executor("b").run_file(TaskFile(root=SequenceBlock(children=[refused])))
         assert ok.outcome == "succeeded" and len(person.seen) == 1
         assert no.outcome == "failed" and "(precondition)" in no.message
+
+
+@settings(max_examples=150, deadline=None, database=None)
+@given(
+    payload=st.one_of(
+        st.binary(max_size=48),
+        st.builds(
+            lambda r, i, ok: msgspec.msgpack.encode({"request": r, "id": i, "success": ok}),
+            st.sampled_from(["ListPending", "AnswerPending", "Nope"]),
+            st.one_of(st.text(max_size=4), st.integers(-5, 5), st.none()),
+            st.one_of(st.booleans(), st.text(max_size=3), st.none()),
+        ),
+    )
+)
+def test_fuzzed_operator_requests_get_a_reply_and_answer_nothing(payload: bytes) -> None:
+    desk = OperatorDesk()
+    data, ok = OperatorService("operator", desk).handle_bytes(payload)
+    reply = decode_operator_reply(data)
+    assert isinstance(reply, PendingReply) if ok else isinstance(reply, ErrorReply)
+    assert desk.pending() == []
