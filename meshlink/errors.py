@@ -63,7 +63,8 @@ class SessionError(MeshlinkError):
         return cls(
             f"cannot open a Zenoh session in {mode} mode; tried {tried}: {cause}. "
             "Start a router with `skimesh router` (or point --connect ENDPOINT at the "
-            "router you use).",
+            "router you use); if it runs, it may have refused this client's user/password "
+            "or certificate.",
             endpoints=connect,
         )
 

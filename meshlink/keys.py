@@ -65,8 +65,13 @@ class KeySpace:
 
     # ---------------------------------------------------------------- world model
     def wm_rpc(self) -> str:
-        """Queryable of the WM store for typed requests."""
+        """Queryable of the WM store for typed requests, writes included."""
         return f"{self.prefix}/wm/rpc"
+
+    def wm_query(self) -> str:
+        """Read-only queryable of the WM store (every request but transactions), so an ACL
+        can let readers in without letting them write."""
+        return f"{self.prefix}/wm/query"
 
     def wm_changes(self) -> str:
         """Publication of committed WM transactions."""

@@ -23,16 +23,18 @@ def router_config(
     connect: Sequence[str] = (),
     config_file: str | None = None,
 ) -> MeshConfig:
-    """The :class:`MeshConfig` of a router listening on ``listen`` (default
-    ``tcp/127.0.0.1:7447``, loopback only) and optionally linked to other routers
-    (``connect``). Multicast scouting stays off.
+    """The :class:`MeshConfig` of a router listening on ``listen`` and optionally linked to
+    other routers (``connect``). Without ``listen``: the config file's listen endpoints if it
+    sets some, else ``tcp/127.0.0.1:7447`` (loopback only). Multicast scouting stays off.
 
     Raises:
         ConfigError: an endpoint is malformed.
     """
     return MeshConfig(
         mode="router",
-        listen=tuple(listen) or (DEFAULT_ROUTER_ENDPOINT,),
+        # empty with a config file: to_zenoh_config keeps the file's endpoints or falls back
+        # to the same loopback default
+        listen=tuple(listen) or (() if config_file else (DEFAULT_ROUTER_ENDPOINT,)),
         connect=tuple(connect),
         config_file=config_file,
     )

@@ -213,7 +213,8 @@ class AgentClient:
         except NoReplyError:
             raise AgentTransportError(
                 f"agent {self.agent!r} did not answer on {key} within {timeout:g} s: is it "
-                f"running on mesh {self.mesh.keys.mesh!r}? (`skimesh agents` lists live agents)"
+                f"running on mesh {self.mesh.keys.mesh!r} (`skimesh agents` lists live agents), "
+                "and does the router's ACL let this user query it? (denials are silent)"
             ) from None
         except MeshlinkError as e:
             raise AgentTransportError(f"agent {self.agent!r}: {e}") from e

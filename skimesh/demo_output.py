@@ -9,14 +9,15 @@ since the task began::
       1.1s    5.0s  r1         #0   navigate done (2.9 s)
 
 A step's progress events are many (a motion reports every 2 %); a line is printed when its
-message changes, not for every fraction. Plans print as a table in start order with the
-partial order ("after": steps that must finish first) and the estimated schedule.
+message changes, not for every fraction (and not for the agent's "holds devices" lines).
+Plans print as a table in start order with the partial order ("after": steps that must
+finish first) and the estimated schedule.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from task_agent.protocol import (
@@ -29,12 +30,18 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
+from wm_store.protocol import Value
 
-from .recording import LabelOf, step_text
+from .recording import step_text
 
 __all__ = ["MissionView", "RobotStats"]
 
 Out = Callable[[str], None]
+CallFormat = Callable[[str, str, Mapping[str, Value]], str]
+
+
+def _plain(_agent: str, skill: str, params: Mapping[str, Value]) -> str:
+    return step_text(skill, params, str)
 
 
 @dataclass
@@ -57,8 +64,9 @@ class _Step:
 class MissionView:
     """Prints the task's events (see the module doc) and keeps the figures of the summary."""
 
-    label_of: LabelOf
     sim_clock: Callable[[], float]
+    call_text: CallFormat = _plain
+    """How a skill call is shown (:class:`skimesh.recording.CallText`)."""
     out: Out = print
     plans: list[Planned] = field(default_factory=list)
     robots: dict[str, RobotStats] = field(default_factory=dict)
@@ -101,12 +109,13 @@ class MissionView:
                 self.plans.append(event)
                 return ["plan ready", *self.plan_lines(event)]
             case StepStarted():
-                call = step_text(event.skill, event.params, self.label_of)
+                call = self.call_text(event.agent, event.skill, event.params)
                 self._steps[event.step] = _Step(event.agent, event.skill, sim)
                 return [_row(event.agent, event.step, f"{call} started")]
             case StepProgress():
                 step = self._steps.get(event.step)
-                if step is None or not event.message or event.message == step.last:
+                quiet = event.state == "pending" or not event.message  # "holds devices: ..."
+                if step is None or quiet or event.message == step.last:
                     return []
                 step.last = event.message
                 return [_row(event.agent, event.step, f"{step.skill}: {event.message}")]
@@ -145,7 +154,7 @@ class MissionView:
         )
         rows = [head, f"    {'step':>4}  {'robot':<10} {'skill':<46} {'after':<9} estimated"]
         for s in sorted(plan.steps, key=lambda s: (s.start, s.index)):
-            call = step_text(s.skill, s.params, self.label_of)
+            call = self.call_text(s.agent, s.skill, s.params)
             after = ",".join(map(str, s.after)) or "-"
             rows.append(
                 f"    {s.index:>4}  {s.agent:<10} {_cut(call, 46):<46} {after:<9} "

@@ -5,6 +5,8 @@ network. It serves:
 
 - ``wm/rpc``: typed requests (:mod:`wm_store.protocol`), answered by :class:`WmService`; an error
   is sent as a Zenoh error reply carrying an :class:`~wm_store.protocol.ErrorReply`;
+- ``wm/query``: the same for every request but transactions (read-only), so a router ACL can
+  let read-only users read the world model without letting them write;
 - ``wm/elements/<id>``: storage-style reads, each element as JSON, so any Zenoh tool
   (``z_get -s 'skimesh/default/wm/elements/**'``) can read the world model;
 - ``wm/changes``: one publication per durable change, congestion control BLOCK (a dropped
@@ -52,6 +54,12 @@ async def serve_store(
         data, ok = await service.handle_bytes(query.payload or b"")
         return [Answer(key=rpc_key, payload=data, ok=ok)]
 
+    read_key = keys.wm_query()
+
+    async def read(query: IncomingQuery) -> list[Answer]:
+        data, ok = await service.handle_bytes(query.payload or b"", read_only=True)
+        return [Answer(key=read_key, payload=data, ok=ok)]
+
     async def elements(query: IncomingQuery) -> list[Answer]:
         return _element_answers(store, keys.wm_element, query.key_expr)
 
@@ -65,6 +73,7 @@ async def serve_store(
             async with anyio.create_task_group() as tg:
                 await tg.start(store.run)
                 await tg.start(mesh.serve, rpc_key, rpc)
+                await tg.start(mesh.serve, read_key, read)
                 await tg.start(mesh.serve, keys.wm_elements(), elements)
                 if presence:
                     await tg.start(PresenceMonitor(mesh, store).run)

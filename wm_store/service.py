@@ -51,8 +51,10 @@ class WmService:
         self.max_request_bytes = max_request_bytes
         self._sparql = SparqlEngine()
 
-    async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
-        """Decode, answer and encode one request. Returns ``(reply bytes, ok)``."""
+    async def handle_bytes(self, data: bytes, *, read_only: bool = False) -> tuple[bytes, bool]:
+        """Decode, answer and encode one request. Returns ``(reply bytes, ok)``.
+
+        ``read_only`` refuses transactions (the ``wm/query`` endpoint)."""
         if len(data) > self.max_request_bytes:
             reply: Reply = ErrorReply(
                 code=ProtocolError.code,
@@ -65,7 +67,13 @@ class WmService:
             except (msgspec.DecodeError, msgspec.ValidationError) as exc:
                 reply = ErrorReply(code=ProtocolError.code, message=f"malformed request: {exc}")
             else:
-                reply = await self.handle(request)
+                if read_only and isinstance(request, Transact):
+                    reply = ErrorReply(
+                        code=ProtocolError.code,
+                        message="this endpoint is read-only: send transactions to wm/rpc",
+                    )
+                else:
+                    reply = await self.handle(request)
         return encode(reply), not isinstance(reply, ErrorReply)
 
     async def handle(self, request: Request) -> Reply:

@@ -4,8 +4,8 @@ implementations.
 - :class:`InMemoryTransport` calls a :class:`~wm_store.service.WmService` in the same process
   (unit tests, the one-process demo). Messages still go through the MessagePack codec, so a
   schema bug shows up here as it would on the wire.
-- :class:`ZenohTransport` talks to ``skimesh wm`` over Zenoh: requests on ``wm/rpc``,
-  changes from ``wm/changes``.
+- :class:`ZenohTransport` talks to ``skimesh wm`` over Zenoh: transactions on ``wm/rpc``, every
+  read on the read-only ``wm/query``, changes from ``wm/changes``.
 
 Both raise :class:`~wm_store.errors.TransportError` when the store cannot be reached and turn an
 error reply into the matching :class:`~wm_store.errors.WmError` subclass.
@@ -26,7 +26,16 @@ from meshlink import Mesh, MeshlinkError, NoReplyError
 from meshlink import RemoteError as MeshRemoteError
 
 from .errors import ProtocolError, TransportError, error_for_code
-from .protocol import Change, ErrorReply, Reply, Request, decode_change, decode_reply, encode
+from .protocol import (
+    Change,
+    ErrorReply,
+    Reply,
+    Request,
+    Transact,
+    decode_change,
+    decode_reply,
+    encode,
+)
 from .service import WmService
 
 __all__ = ["InMemoryTransport", "WmTransport", "ZenohTransport", "raise_for_error"]
@@ -87,7 +96,8 @@ class ZenohTransport:
         self.mesh = mesh
 
     async def request(self, request: Request, *, timeout: float) -> Reply:
-        key = self.mesh.keys.wm_rpc()
+        keys = self.mesh.keys
+        key = keys.wm_rpc() if isinstance(request, Transact) else keys.wm_query()
         try:
             data = await self.mesh.request(key, encode(request), timeout=timeout)
         except MeshRemoteError as exc:

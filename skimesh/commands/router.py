@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
+from pathlib import Path
 
-from meshlink import DEFAULT_ROUTER_ENDPOINT, run_router
+from meshlink import DEFAULT_ROUTER_ENDPOINT, MeshlinkError, run_router
 
 from ..runtime import run_service
 
@@ -31,11 +33,20 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def _run(args: argparse.Namespace) -> int:
-    listen = list(args.listen or [DEFAULT_ROUTER_ENDPOINT])
+    # --listen wins; else the config file's listen endpoints; else the loopback default.
+    listen = list(args.listen or ([] if args.config else [DEFAULT_ROUTER_ENDPOINT]))
+    if args.config and not Path(args.config).is_file():
+        print(f"skimesh router: no config file {args.config}", file=sys.stderr)
+        return 2
 
     async def main() -> int:
-        logging.getLogger("skimesh").warning("router listening on %s", ", ".join(listen))
-        await run_router(listen, config_file=args.config)
+        where = ", ".join(listen) or f"the endpoints of {args.config}"
+        logging.getLogger("skimesh").warning("router listening on %s", where)
+        try:
+            await run_router(listen, config_file=args.config)
+        except MeshlinkError as e:
+            print(f"skimesh router: {e}", file=sys.stderr)
+            return 2
         return 0
 
     return run_service(main)

@@ -119,7 +119,9 @@ class Lab:
             self.ip(self.hub, "link", "set", "br0", "up")
             for i, host in enumerate(self.hosts[1:], start=1):
                 port = f"p{i}"
-                self.ip(host, "link", "add", "eth0", "type", "veth", "peer", "name", port, "netns", hub)
+                self.ip(
+                    host, "link", "add", "eth0", "type", "veth", "peer", "name", port, "netns", hub
+                )
                 self.ip(self.hub, "link", "set", port, "master", "br0")
                 self.ip(self.hub, "link", "set", port, "up")
                 self.ip(host, "addr", "add", f"{self.address(host)}/24", "dev", "eth0")

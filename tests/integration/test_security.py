@@ -18,9 +18,11 @@ with another CA's or over plain TCP is refused at open.
 from __future__ import annotations
 
 import hashlib
+import json
 import secrets
 import socket
 import subprocess
+import sys
 import textwrap
 import time
 import uuid
@@ -97,14 +99,9 @@ class AclSite:
         )
 
     def flags(self, user: str) -> list[str]:
-        return [
-            "--connect",
-            self.endpoint,
-            "--mesh",
-            self.mesh,
-            "--config",
-            str(self.client_config(user)),
-        ]
+        """Mesh flags of a ``skimesh`` command logged in as ``user``."""
+        config = str(self.client_config(user))
+        return ["--connect", self.endpoint, "--mesh", self.mesh, "--config", config]
 
     @asynccontextmanager
     async def session(self, user: str) -> AsyncIterator[Mesh]:
@@ -147,18 +144,9 @@ def acl_site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[AclSite]:
         store_flags = ["--data", str(folder / "wm"), *site.flags("wm")]
         children.append(Child(["-m", "skimesh", "wm", *store_flags], name="store"))
         children[-1].wait_stderr("world model ready")
-        agent_flags = ["--connect", site.endpoint, "--mesh", site.mesh]
-        zenoh_file = str(site.client_config("agent-r1"))
-        agent = [
-            "-m",
-            "skimesh",
-            "agent",
-            "--config",
-            str(agent_toml),
-            "--zenoh-config",
-            zenoh_file,
-        ]
-        children.append(Child([*agent, *agent_flags], name="agent r1"))
+        agent = ["-m", "skimesh", "agent", "--config", str(agent_toml), *site.flags("agent-r1")]
+        agent[-2] = "--zenoh-config"  # `skimesh agent --config` is the agent's TOML
+        children.append(Child(agent, name="agent r1"))
         children[-1].wait_stderr("agent r1 ready")
         yield site
     finally:
@@ -206,10 +194,12 @@ async def test_the_writer_commits_and_the_read_only_user_changes_nothing(acl_sit
     transact = encode(Transact(ops=[AddElement(type="Gear", label="forged")], author="viewer"))
     async with site.session("viewer") as viewer, anyio.create_task_group() as tg:
         rpc = viewer.keys.wm_rpc()
-        # The world-model client needs wm/rpc even to load: denied, and the error says why.
-        with pytest.raises(TransportError, match="ACL"):
-            async with WmClient.connect(ZenohTransport(viewer), timeout=1.0):
-                pass
+        # The world-model client loads and reads through the read-only wm/query; its writes
+        # go to wm/rpc: denied, and the error says why.
+        async with WmClient.connect(ZenohTransport(viewer), timeout=1.0) as wm:
+            assert wm.revision == revision
+            with pytest.raises(TransportError, match="ACL"):
+                await wm.add_element("Gear", label="forged")
         # A raw transact: no reply (the router drops it silently); meshlink names the ACL.
         t0 = time.monotonic()
         with pytest.raises(NoReplyError, match="ACL"):
@@ -362,3 +352,25 @@ async def test_a_client_without_a_site_certificate_is_refused(
         async with open_mesh(config):
             pass
     assert time.monotonic() - t0 < 2.0
+
+
+def test_the_read_only_user_on_the_command_line(acl_site: AclSite) -> None:
+    def skimesh(*args: str) -> subprocess.CompletedProcess[str]:
+        flags = acl_site.flags("viewer")  # after the command (before a `wm` sub-command)
+        command = [sys.executable, "-m", "skimesh", args[0], *flags, *args[1:]]
+        return subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=60)
+
+    agents = skimesh("agents", "--json", "--timeout", "1")
+    assert agents.returncode == 0, agents.stderr
+    listed = json.loads(agents.stdout)
+    assert [(a["agent"], a["available"]) for a in listed] == [("r1", True)], "read from the WM"
+    skills = skimesh("skills", "r1", "--json")
+    assert skills.returncode == 0 and "noop" in skills.stdout, skills.stderr
+    listing = skimesh("wm", "--timeout", "1", "ls", "Robot")
+    assert listing.returncode == 0, listing.stderr  # reads go to the read-only wm/query
+    assert "Robot-1" in listing.stdout
+    scene = ROOT / "configs" / "scenes" / "sample.ttl"
+    write = skimesh("wm", "--timeout", "1", "import", str(scene))
+    assert write.returncode != 0 and "ACL" in write.stderr, write.stderr
+    run = skimesh("run", "r1", "noop", "--timeout", "1")
+    assert run.returncode == 3, run.stderr  # the agent "cannot be reached"

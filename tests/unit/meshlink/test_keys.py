@@ -28,6 +28,7 @@ def test_every_builder_produces_the_documented_key() -> None:
     assert k.devices() == "skimesh/lab/devices/**"
     assert k.tasks_rpc() == "skimesh/lab/tasks/rpc"
     assert k.operator_rpc() == "skimesh/lab/operator/rpc"
+    assert k.wm_query() == "skimesh/lab/wm/query"
     assert k.task_events("t.42") == "skimesh/lab/tasks/t.42/events"
 
 

@@ -1,0 +1,160 @@
+"""``skimesh demo`` as a user runs it: the default kitting mission and the meal mission, each in
+its own process (``python -m skimesh demo``), simulated as fast as possible, must exit 0 with
+the goal verified in the world model and in the physics, and leave a valid ``.rrd`` holding
+the 3-D scene, each robot's skill timeline, the task events, the plan and the world-model
+changes. Ctrl-C in the middle aborts the task, stops cleanly with exit code 130 and still
+leaves a valid recording.
+
+These are the project's main job (the README's first command): each takes ~15-30 s here.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import pytest
+import rerun.chunk
+
+pytestmark = [pytest.mark.slow, pytest.mark.sim, pytest.mark.zenoh]
+
+ROOT = Path(__file__).resolve().parents[2]
+RERUN = Path(sys.executable).parent / "rerun"
+
+
+def demo(tmp_path: Path, *args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "skimesh", "demo", "--rrd", str(tmp_path / "run.rrd"), *args],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+
+
+class Recording:
+    """What an ``.rrd`` holds: rows per entity (static ones apart) and the text lines."""
+
+    def __init__(self, path: Path) -> None:
+        self.rows: Counter[str] = Counter()
+        self.static: set[str] = set()
+        self.texts: dict[str, list[str]] = {}
+        for chunk in rerun.chunk.RrdReader(path).stream():
+            name = str(chunk.entity_path)
+            if chunk.is_static:
+                self.static.add(name)
+                continue
+            self.rows[name] += chunk.num_rows
+            batch = chunk.to_record_batch()
+            for column in ("TextLog:text", "TextDocument:text"):
+                if column in batch.schema.names:
+                    lines = self.texts.setdefault(name, [])
+                    lines += [str(t) for row in batch.column(column).to_pylist() for t in row or []]
+
+    def lines(self, entity: str) -> list[str]:
+        return self.texts.get(entity, [])
+
+
+def check_recording(path: Path, robots: list[str], moving: str, geometry: str) -> Recording:
+    assert path.stat().st_size > 100_000
+    verify = subprocess.run(
+        [str(RERUN), "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert verify.returncode == 0, verify.stderr
+    rec = Recording(path)
+    assert geometry in rec.static, "the scene's geometry, once"
+    assert rec.rows[moving] > 50, "body poses over time"
+    for robot in robots:
+        assert rec.rows[f"/robots/{robot}/progress"] > 0
+        assert any("started" in line for line in rec.lines(f"/robots/{robot}/skill")), robot
+    events = rec.lines("/task/events")
+    assert events[0].startswith("task t-") and "succeeded" in events[-1]
+    assert any(line.startswith("plan 0:") for line in events)
+    assert rec.lines("/task/plan")[0].startswith("# Plan 0")
+    assert rec.rows["/task/plan/graph"] >= 2  # nodes and edges
+    changes = rec.lines("/world_model/changes")
+    assert changes[0].startswith("rev 1 by demo:"), "the scene, in one transaction"
+    assert len(changes) > 10
+    assert any("GOAL REACHED" in line for line in rec.lines("/demo/log"))
+    return rec
+
+
+@pytest.mark.timeout(420)
+def test_the_kitting_demo_fills_both_kits(tmp_path: Path) -> None:
+    started = time.monotonic()
+    done = demo(tmp_path)  # the README's command: the default scenario, kitting
+    took = time.monotonic() - started
+    out = done.stdout
+    assert done.returncode == 0, out[-3000:] + done.stderr[-3000:]
+    assert "[demo] scenario kitting" in out
+    assert "== GOAL REACHED" in out
+    assert "facts: 6/6 hold in the world model, 6/6 in the physics" in out
+    for part, kit in (("Gear-1", "KitBox-1"), ("Bolt-2", "KitBox-2")):
+        assert f"{part} lies in {kit}" in out
+    assert f"recording: {tmp_path / 'run.rrd'}" in out
+    assert "stopped cleanly" in out
+    assert done.stderr == "", "no warnings or errors on the way"
+    rec = check_recording(
+        tmp_path / "run.rrd", ["r1", "r2"], "/world/r1.forearm", "/world/Gear-1/cylinder"
+    )
+    assert any("+contain(KitBox-1, " in line for line in rec.lines("/world_model/changes"))
+    assert took < 240, f"the kitting demo took {took:.0f} s"
+
+
+@pytest.mark.timeout(420)
+def test_the_meal_demo_serves_the_heated_meal(tmp_path: Path) -> None:
+    started = time.monotonic()
+    done = demo(tmp_path, "--scenario", "meal")
+    took = time.monotonic() - started
+    out = done.stdout
+    assert done.returncode == 0, out[-3000:] + done.stderr[-3000:]
+    assert "== GOAL REACHED" in out
+    assert "facts: 3/3 hold in the world model, 2/2 in the physics" in out
+    assert "MealBox-1 lies in Tray-1" in out and "door closed" in out
+    assert "microwave  #" in out and "heat(" in out, "the microwave is an agent of its own"
+    assert done.stderr == ""
+    rec = check_recording(
+        tmp_path / "run.rrd", ["friend", "Microwave-1"], "/world/MealBox-1", "/world/Tray-1/box"
+    )
+    assert any("heat" in line for line in rec.lines("/robots/Microwave-1/skill"))
+    assert took < 240, f"the meal demo took {took:.0f} s"
+
+
+@pytest.mark.timeout(240)
+def test_ctrl_c_aborts_the_task_and_stops_cleanly(tmp_path: Path) -> None:
+    rrd = tmp_path / "run.rrd"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "skimesh", "demo", "--rrd", str(rrd)],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    lines: list[str] = []
+    try:
+        assert process.stdout is not None
+        for line in process.stdout:
+            lines.append(line)
+            if " started" in line and "#" in line:  # the first step runs
+                process.send_signal(signal.SIGINT)
+                break
+        lines += process.stdout.readlines()
+        code = process.wait(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    out = "".join(lines)
+    assert code == 130, out[-3000:]
+    assert "aborting the task: interrupted (Ctrl-C)" in out
+    assert "aborted" in out and "FAILED (preempted)" in out, "the runs were stopped"
+    assert "== GOAL NOT REACHED" in out and "stopped cleanly" in out
+    verify = subprocess.run([str(RERUN), "rrd", "verify", str(rrd)], capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr

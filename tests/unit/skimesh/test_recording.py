@@ -1,0 +1,191 @@
+"""The mission in rerun: one line per world-model change, skill calls as people read them, and
+every task event on the task log, the plan document and graph, and each robot's timeline."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from pathlib import Path
+
+import anyio
+import pytest
+import rerun as rr
+import rerun.chunk
+
+from device_drivers.scenario_load import load_scenario
+from skill_agent.config import load_config
+from skill_agent.scenario_wm import scenario_ops
+from skill_agent.server import agent_registration
+from skill_agent.skills import Navigate, Pick, Place
+from skimesh.recording import CallText, MissionRecording, describe_change, step_text
+from task_agent.protocol import (
+    Planned,
+    PlannedStep,
+    Replanning,
+    StepFinished,
+    StepProgress,
+    StepStarted,
+    TaskEvent,
+    TaskFinished,
+    TaskStarted,
+)
+from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
+
+ROOT = Path(__file__).resolve().parents[3]
+LABELS = {"KitBox-1": "kit", "Gear-1": "gear"}
+
+
+def label_of(element_id: str) -> str:
+    return LABELS.get(element_id, element_id)
+
+
+def test_a_change_is_one_line_with_its_revision_and_author() -> None:
+    change = Change(
+        revision=42,
+        author="r1",
+        stamp=0.0,
+        deltas=[
+            ElementPut(element=Element(id="Gear-1", type="Gear", label="gear")),
+            RelationAdded(relation=Relation("KitBox-1", "contain", "Gear-1")),
+            ElementRemoved(id="Bolt-9"),
+        ],
+    )
+    assert describe_change(change, label_of) == (
+        "rev 42 by r1: put gear, +contain(kit, gear), removed Bolt-9"
+    )
+    many = Change(
+        revision=1,
+        author="demo",
+        stamp=0.0,
+        deltas=[ElementPut(element=Element(id=f"Gear-{i}", type="Gear")) for i in range(9)],
+    )
+    assert describe_change(many, label_of) == "rev 1 by demo: 9 deltas (9 put)"
+
+
+@pytest.fixture
+async def wm() -> AsyncIterator[WmClient]:
+    ontology = Ontology.default()
+    store = await WmStore.open(ontology)
+    async with anyio.create_task_group() as tg:
+        await tg.start(store.run)
+        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
+            yield client
+        tg.cancel_scope.cancel()
+
+
+@pytest.mark.anyio
+async def test_calls_leave_out_hardware_and_defaults(wm: WmClient) -> None:
+    reply = await wm.transact(
+        scenario_ops(load_scenario(ROOT / "configs" / "scenarios" / "kitting" / "scenario.toml"))
+    )
+    ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
+    config = load_config(ROOT / "configs" / "agents" / "kitting" / "r1.toml")
+    skills = [Navigate.description, Pick.description, Place.description]
+    await wm.register_robot(agent_registration(config, skills))
+
+    def labels(element_id: str) -> str:
+        element = wm.find_element(element_id)
+        return element.label if element is not None else element_id
+
+    text = CallText(wm, labels)
+    params = {
+        "object": ids["Gear-1"],
+        "holder": ids["PartBox-1"],
+        "robot": ids["r1"],
+        "arm": ids["r1-arm"],
+        "sensor": ids["Camera-1"],
+        "platform": None,
+        "force": 20.0,
+        "approach": 0.2,
+    }
+    assert text("r1", "pick", params) == "pick(object=Gear-1, holder=PartBox-1, approach=0.2)"
+    assert text("r9", "pick", {"object": ids["Gear-1"]}) == "pick(object=Gear-1)"  # unknown
+    assert step_text("heat", {"duration": 45.0}, labels) == "heat(duration=45.0)"
+
+
+def _events() -> list[TaskEvent]:
+    steps = [
+        PlannedStep(index=0, agent="r1", skill="navigate", params={"goal": "Station-1"}),
+        PlannedStep(index=1, agent="r1", skill="pick", params={"object": "Gear-1"}, after=[0]),
+    ]
+    t, at = "t-1", 0.0
+    return [
+        TaskStarted(task_id=t, seq=1, stamp=at, goal="contain(KitBox-1, Gear-1)"),
+        Planned(task_id=t, seq=2, stamp=at, steps=steps, planner="kairos", makespan=9.0),
+        StepStarted(
+            task_id=t,
+            seq=3,
+            stamp=at,
+            step=0,
+            agent="r1",
+            skill="navigate",
+            run_id="a",
+            params={"goal": "Station-1"},
+        ),
+        StepProgress(
+            task_id=t,
+            seq=4,
+            stamp=at,
+            step=0,
+            agent="r1",
+            state="executing",
+            message="driving",
+            fraction=0.5,
+        ),
+        StepFinished(
+            task_id=t,
+            seq=5,
+            stamp=at,
+            step=0,
+            agent="r1",
+            skill="navigate",
+            success=False,
+            reason="execution",
+            message="blocked",
+        ),
+        Replanning(task_id=t, seq=6, stamp=at, attempt=1, reason="step 0 failed"),
+        TaskFinished(task_id=t, seq=7, stamp=at, outcome="failed", message="gave up"),
+    ]
+
+
+def _texts(path: Path) -> dict[str, list[str]]:
+    found: dict[str, list[str]] = {}
+    for chunk in rerun.chunk.RrdReader(path).stream():
+        batch = chunk.to_record_batch()
+        name = str(chunk.entity_path)
+        if name.startswith(("/task", "/robots", "/world_model", "/demo")) and not chunk.is_static:
+            assert {"sim_time", "wall_time"} <= set(chunk.timeline_names), name
+        found.setdefault(name, [])
+        for column in ("TextLog:text", "TextDocument:text"):
+            if column in batch.schema.names:
+                for row in batch.column(column).to_pylist():
+                    found[name] += [str(t) for t in row or []]
+    return found
+
+
+def test_task_events_go_to_the_task_log_the_plan_and_the_robots(tmp_path: Path) -> None:
+    path = tmp_path / "mission.rrd"
+    rec = rr.RecordingStream("skimesh-test")
+    rec.set_sinks(rr.FileSink(str(path)))
+    clock = iter(float(t) for t in range(100))
+    recording = MissionRecording(
+        rec, sim_clock=lambda: next(clock), label_of=label_of, robots={"r1": "robot-1"}
+    )
+    recording.note("hello")
+    for event in _events():
+        recording.task_event(event)
+    recording.wm_change(Change(revision=3, author="r1", stamp=0.0, deltas=[]))
+    rec.flush()
+    rec.disconnect()
+    texts = _texts(path)
+    assert {"/" + e for e in recording.entities()} | {"/task/plan/graph"} <= set(texts)
+    events = texts["/task/events"]
+    assert events[0] == "task t-1 started: contain(KitBox-1, Gear-1)"
+    assert "replanning (attempt 1): step 0 failed" in events
+    assert events[-1].startswith("task t-1 failed: 0 steps run, 0 replans")
+    assert "| 1 | r1 | `pick(object=gear)` | 0 |" in texts["/task/plan"][0]
+    skill = texts["/robots/robot-1/skill"]
+    assert skill[:2] == ["step 0 navigate(goal=Station-1)", "step 0 navigate [executing] driving"]
+    assert skill[2] == "step 0 navigate FAILED (execution): blocked"
+    assert texts["/world_model/changes"] == ["rev 3 by r1: no change"]
+    assert texts["/demo/log"] == ["hello"]
