@@ -20,9 +20,9 @@ pytestmark = pytest.mark.zenoh
 def test_router_listens_on_the_config_files_endpoints(tmp_path: Path) -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     config = tmp_path / "router.json5"
+    listen = f'listen: {{ endpoints: ["{endpoint}"] }}'
     config.write_text(
-        '{ mode: "router", listen: { endpoints: ["%s"] },\n'
-        "  scouting: { multicast: { enabled: false } } }\n" % endpoint
+        f'{{ mode: "router", {listen}, scouting: {{ multicast: {{ enabled: false }} }} }}\n'
     )
     router = Child(["-m", "skimesh", "router", "--config", str(config)], name="router")
     try:
