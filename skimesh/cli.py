@@ -9,6 +9,12 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from device_drivers.errors import DeviceError
+from meshlink import MeshlinkError
+from skill_agent.errors import SkillError
+from task_agent.errors import TaskError
+from wm_store.errors import WmError
+
 from .commands import agent, demo, router, sim, task, wm
 from .runtime import configure_logging
 
@@ -35,6 +41,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Errors a user can act on: printed as one line (exit code 2), not as a traceback.
+USER_ERRORS: tuple[type[Exception], ...] = (
+    MeshlinkError,
+    WmError,
+    SkillError,
+    TaskError,
+    DeviceError,
+    OSError,
+)
+
+
+def _leaves(error: BaseException) -> list[BaseException]:
+    if isinstance(error, BaseExceptionGroup):
+        return [leaf for e in error.exceptions for leaf in _leaves(e)]
+    return [error]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -43,6 +66,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args))
     except KeyboardInterrupt:
         return 130
+    except (*USER_ERRORS, BaseExceptionGroup) as error:  # type: ignore[misc]  # a tuple: mypy misreads the unpacking
+        leaves = _leaves(error)
+        if not all(isinstance(leaf, USER_ERRORS) for leaf in leaves):
+            raise
+        for leaf in leaves:
+            print(f"skimesh {args.command}: {leaf}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import logging
 import sys
 from pathlib import Path
 
-from meshlink import DEFAULT_ROUTER_ENDPOINT, MeshlinkError, run_router
+import anyio
+
+from meshlink import DEFAULT_ROUTER_ENDPOINT, run_router
 
 from ..runtime import run_service
 
@@ -41,12 +44,9 @@ def _run(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         where = ", ".join(listen) or f"the endpoints of {args.config}"
-        logging.getLogger("skimesh").warning("router listening on %s", where)
-        try:
-            await run_router(listen, config_file=args.config)
-        except MeshlinkError as e:
-            print(f"skimesh router: {e}", file=sys.stderr)
-            return 2
+        async with anyio.create_task_group() as tg:  # errors: printed by skimesh.cli.main
+            await tg.start(functools.partial(run_router, listen, config_file=args.config))
+            logging.getLogger("skimesh").warning("router listening on %s", where)
         return 0
 
     return run_service(main)

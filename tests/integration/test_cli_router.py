@@ -48,3 +48,22 @@ def test_a_missing_config_file_is_a_clear_error(tmp_path: Path) -> None:
     assert result.returncode == 2
     assert "no config file" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_a_busy_port_is_one_clear_line(tmp_path: Path) -> None:
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        result = subprocess.run(
+            [sys.executable, "-m", "skimesh", "router", "--listen", f"tcp/127.0.0.1:{port}"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert result.returncode == 2
+    assert "Address already in use" in result.stderr
+    assert "Traceback" not in result.stderr
