@@ -243,6 +243,7 @@ class Recorder:
                     translations=starts,
                     quaternions=quat,
                     colors=colors,
+                    fill_mode="solid",  # the default draws capsules as wireframes
                 )
             elif kind == mujoco.mjtGeom.mjGEOM_SPHERE:
                 radii = np.repeat(size[:, :1], 3, axis=1)

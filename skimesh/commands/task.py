@@ -42,9 +42,10 @@ from task_agent.protocol import (
 )
 from wm_store import WmClient, WmError, ZenohTransport
 
-from ..connect import mesh_session
+from ..connect import mesh_session, wm_session
 from ..runtime import run_service
 from . import operator as operator_command
+from . import plan as plan_command
 
 __all__ = ["EXIT_CODES", "ProgressPrinter", "add_parser"]
 
@@ -98,6 +99,9 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "--operator-fallback", action="store_true", help="ask the operator when a step fails"
     )
     submit.add_argument("--detach", action="store_true", help="print the task id and return")
+    submit.add_argument(
+        "--emit-pddl", type=Path, metavar="DIR", help="also write the goal's PDDL into DIR"
+    )
     _follow_arguments(submit)
     _client_arguments(submit)
     submit.set_defaults(func=lambda a: _client(a, _submit))
@@ -128,6 +132,16 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     verify.add_argument("file", type=Path)
     _client_arguments(verify)
     verify.set_defaults(func=lambda a: _client(a, _verify))
+
+    plan = cmds.add_parser(
+        "plan",
+        help="plan a goal without running it (prints the schedule; --emit-pddl DIR)",
+        description=plan_command.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    plan_command.add_arguments(plan)
+    _client_arguments(plan)
+    plan.set_defaults(func=lambda a: _client(a, plan_command.plan_goal))
 
     operator_command.add_parser(sub)
 
@@ -315,6 +329,10 @@ def _options(args: argparse.Namespace) -> TaskOptions:
 async def _submit(args: argparse.Namespace) -> int:
     text = args.file.read_text(encoding="utf-8") if args.file else ""
     task_id = args.task_id or new_task_id()
+    if args.emit_pddl and args.goal:
+        async with wm_session(args, author="planner-cli") as wm:
+            for path in await plan_command.emit_pddl(wm, args.goal, args.engine, args.emit_pddl):
+                print(f"wrote {path}", file=sys.stderr)
     async with mesh_session(args) as mesh:
         client = TaskClient(mesh, timeout=args.timeout)
         async with client.watch(task_id, deadline=args.deadline, existing=False) as events:

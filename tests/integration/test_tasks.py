@@ -349,6 +349,22 @@ def test_cli_submit_verify_and_an_unsolvable_goal(site: Site) -> None:
     assert verified.returncode == 1 and "no agent 'r9'" in verified.stderr, verified.stderr
 
 
+def test_cli_plan_dry_run_and_emit_pddl(site: Site) -> None:
+    out = site.folder / "pddl"
+    planned = site.skimesh(
+        "task", "plan", "--goal", "contain(kit-r1, gear-7)", "--emit-pddl", str(out)
+    )
+    assert planned.returncode == 0, planned.stdout + planned.stderr
+    assert "pick" in planned.stdout and "place" in planned.stdout, planned.stdout
+    domain = (out / "domain.pddl").read_text()
+    problem = (out / "problem.pddl").read_text()
+    assert "(:action pick__r1" in domain.lower()
+    assert "(:goal" in problem.lower()
+    no = site.skimesh("task", "plan", "--goal", "not contain(station-1, box-1)")
+    assert no.returncode == 2, no.stdout + no.stderr
+    assert "unsolvable" in no.stderr
+
+
 async def test_killing_an_agent_mid_task_lets_the_other_robot_finish(site: Site) -> None:
     async with site.connected() as (_, wm, client):
         await place_robot(wm, "r1", "station-1")
