@@ -34,7 +34,7 @@ from device_drivers.errors import ModelError
 from device_drivers.gripper_model import add_gripper_drive, add_parallel_gripper
 from device_drivers.robot_spec import Pose2D, RobotSpec, robot_layout
 
-__all__ = ["TIMESTEP", "build_robot", "build_world", "configure_physics"]
+__all__ = ["TIMESTEP", "build_base", "build_robot", "build_world", "configure_physics"]
 
 TIMESTEP = 0.002
 """Physics step of every generated model, s."""
@@ -102,19 +102,7 @@ def build_robot(
     mj = mujoco.MjSpec()
     mj.modelname = spec.name
     configure_physics(mj)
-
-    # Holonomic base: x slide, y slide, yaw hinge, one per body.
-    bx = mj.worldbody.add_body(name=f"{p}base_x", pos=[at.x, 0, 0])
-    by = bx.add_body(name=f"{p}base_y", pos=[0, at.y, 0])
-    base = by.add_body(name=f"{p}base", quat=_yaw_quat(at.yaw))
-    for body in (bx, by):  # massless in spirit; MuJoCo needs some mass on moving bodies
-        body.explicitinertial = True
-        body.mass, body.inertia = 0.1, [1e-3, 1e-3, 1e-3]
-    free = mujoco.mjtLimited.mjLIMITED_FALSE
-    bx.add_joint(name=f"{p}base_x", type=_SLIDE, axis=[1, 0, 0], ref=at.x, limited=free)
-    by.add_joint(name=f"{p}base_y", type=_SLIDE, axis=[0, 1, 0], ref=at.y, limited=free)
-    base.add_joint(name=f"{p}base_yaw", type=_HINGE, axis=[0, 0, 1], ref=at.yaw, limited=free)
-    _add_chassis(base, spec, p)
+    base = _add_base(mj, spec, p, at)
 
     # Arm: link lengths along +z at joint value 0.
     top = spec.base_height + spec.pedestal_height
@@ -159,6 +147,52 @@ def build_robot(
     add_gripper_drive(mj, spec, p)
     _check_compiles(mj, spec.name)
     return mj
+
+
+def build_base(
+    spec: RobotSpec,
+    prefix: str | None = None,
+    *,
+    at: Pose2D | None = None,
+    into: mujoco.MjSpec | None = None,
+) -> mujoco.MjSpec:
+    """The holonomic base of :func:`build_robot` alone (chassis, pedestal, base joints and
+    their servos), with a site ``<prefix>arm_mount`` on top of the pedestal (z up, x forward)
+    where another arm model can be attached (see ``device_drivers.menagerie``).
+
+    With ``into`` (e.g. a world from :func:`build_world`) the base is added to that spec's world
+    body, which is returned uncompiled; otherwise a new spec is returned, compiled once.
+    """
+    at = at or Pose2D()
+    p = spec.prefix if prefix is None else prefix
+    mj = into if into is not None else mujoco.MjSpec()
+    if into is None:
+        mj.modelname = spec.name
+        configure_physics(mj)
+    base = _add_base(mj, spec, p, at)
+    top = spec.base_height + spec.pedestal_height
+    base.add_site(name=f"{p}arm_mount", pos=[spec.arm_mount_x, 0, top], size=[0.02, 0, 0])
+    for jname in robot_layout(spec, p).base_joints:
+        _add_servo(mj, jname, jname.removeprefix(p))
+    if into is None:
+        _check_compiles(mj, spec.name)
+    return mj
+
+
+def _add_base(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> mujoco.MjsBody:
+    """Holonomic base: x slide, y slide, yaw hinge, one per body; returns the chassis body."""
+    bx = mj.worldbody.add_body(name=f"{p}base_x", pos=[at.x, 0, 0])
+    by = bx.add_body(name=f"{p}base_y", pos=[0, at.y, 0])
+    base = by.add_body(name=f"{p}base", quat=_yaw_quat(at.yaw))
+    for body in (bx, by):  # massless in spirit; MuJoCo needs some mass on moving bodies
+        body.explicitinertial = True
+        body.mass, body.inertia = 0.1, [1e-3, 1e-3, 1e-3]
+    free = mujoco.mjtLimited.mjLIMITED_FALSE
+    bx.add_joint(name=f"{p}base_x", type=_SLIDE, axis=[1, 0, 0], ref=at.x, limited=free)
+    by.add_joint(name=f"{p}base_y", type=_SLIDE, axis=[0, 1, 0], ref=at.y, limited=free)
+    base.add_joint(name=f"{p}base_yaw", type=_HINGE, axis=[0, 0, 1], ref=at.yaw, limited=free)
+    _add_chassis(base, spec, p)
+    return base
 
 
 def _yaw_quat(yaw: float) -> list[float]:

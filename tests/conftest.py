@@ -21,7 +21,6 @@ import pytest
 # first imported while pytest formats a failure deep in an exception group, CPython 3.11.7's
 # ast.parse fails with "SystemError: AST constructor recursion depth mismatch", which hides the
 # real failure. Importing it here, at collection, keeps failure reports intact.
-
 from meshlink import MeshConfig, Mode
 from meshlink.testing import free_port, running_router
 
