@@ -14,13 +14,13 @@ import uuid
 from collections.abc import AsyncIterator, Iterator
 from typing import Protocol
 
-import hypothesis  # noqa: F401  # imported up front: see below
+# hypothesis is imported up front: pytest rewrites the asserts of modules it imports,
+# hypothesis's included, and when hypothesis is first imported while pytest formats a failure
+# deep in an exception group, CPython 3.11.7's ast.parse fails with "SystemError: AST
+# constructor recursion depth mismatch", which hides the real failure.
+import hypothesis  # noqa: F401
 import pytest
 
-# pytest rewrites the asserts of modules it imports, hypothesis's included. When hypothesis is
-# first imported while pytest formats a failure deep in an exception group, CPython 3.11.7's
-# ast.parse fails with "SystemError: AST constructor recursion depth mismatch", which hides the
-# real failure. Importing it here, at collection, keeps failure reports intact.
 from meshlink import MeshConfig, Mode
 from meshlink.testing import free_port, running_router
 
