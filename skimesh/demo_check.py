@@ -9,8 +9,9 @@ demo also asks the simulation (ground truth the skills never read):
 - anything else (``heated(MealBox-1)``: the simulation has no temperatures) is a world-model
   fact only, and says so.
 
-:func:`verify_goal` lets the world settle for ``settle`` simulated seconds first, so a part
-still rolling into its box is judged at rest.
+:func:`verify_goal` lets the world settle first (``settle`` simulated seconds, then until the
+objects named are at rest, within a bound), so a part still rolling into its box is judged at
+rest; one still moving or held is reported as such.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from task_agent.goals import Goal, GoalLiteral, PropertyGoal, RelationGoal
 __all__ = ["FactCheck", "goal_holds", "verify_goal"]
 
 LabelOf = Callable[[str], str]
+REST_SPEED = 0.01
+"""m/s: an object slower than this is at rest (as :meth:`SimWorld.object_in` judges)."""
 
 
 @dataclass(frozen=True)
@@ -66,15 +69,32 @@ def _appliance(world: SimWorld, label: str) -> ApplianceState | None:
     return None
 
 
-def _physics(lit: GoalLiteral, world: SimWorld, label_of: LabelOf) -> tuple[bool | None, str]:
-    objects = world.facts.objects
+def _contained(lit: GoalLiteral, world: SimWorld, label_of: LabelOf) -> tuple[str, str] | None:
+    """(thing, holder) labels of a ``contain`` fact between two objects of the world."""
     if isinstance(lit, RelationGoal) and lit.predicate == "contain":
         holder, thing = label_of(lit.subject), label_of(lit.object)
-        if holder in objects and thing in objects:
-            inside = world.object_in(thing, holder)
-            where = world.body_pose(thing)
-            seen = f"{thing} {'lies' if inside else 'does not lie'} in {holder}"
-            return inside == lit.holds, f"{seen} (at {where.x:.3f}, {where.y:.3f}, {where.z:.3f})"
+        if holder in world.facts.objects and thing in world.facts.objects:
+            return thing, holder
+    return None
+
+
+def _at_rest(world: SimWorld, label: str) -> bool:
+    snap = world.snapshot
+    return label not in snap.attached and snap.speeds.get(label, 0.0) <= REST_SPEED
+
+
+def _physics(lit: GoalLiteral, world: SimWorld, label_of: LabelOf) -> tuple[bool | None, str]:
+    pair = _contained(lit, world, label_of)
+    if pair is not None:
+        thing, holder = pair
+        inside = world.object_in(thing, holder)
+        where = world.body_pose(thing)
+        seen = f"{thing} {'lies' if inside else 'does not lie'} in {holder}"
+        if not _at_rest(world, thing):
+            speed = world.snapshot.speeds.get(thing, 0.0)
+            held = thing in world.snapshot.attached
+            seen += " (held by a gripper)" if held else f" (still moving, {speed:.3f} m/s)"
+        return inside == lit.holds, f"{seen} (at {where.x:.3f}, {where.y:.3f}, {where.z:.3f})"
     if isinstance(lit, PropertyGoal) and lit.property in ("doorOpen", "heating"):
         state = _appliance(world, label_of(lit.element))
         if state is not None:
@@ -98,11 +118,24 @@ def _fact(lit: GoalLiteral, label_of: LabelOf) -> str:
 
 
 async def verify_goal(
-    goal: Goal, view: WorldView, world: SimWorld, label_of: LabelOf, *, settle: float = 0.5
+    goal: Goal,
+    view: WorldView,
+    world: SimWorld,
+    label_of: LabelOf,
+    *,
+    settle: float = 0.5,
+    rest_within: float = 5.0,
 ) -> list[FactCheck]:
-    """Check every literal of ``goal`` (see the module doc)."""
-    if world.failure is None:
-        await world.sleep(settle)
+    """Check every literal of ``goal`` (see the module doc): after ``settle`` simulated
+    seconds, and once every object a ``contain`` fact names is at rest (at most
+    ``rest_within`` simulated seconds more)."""
+    things = [pair[0] for lit in goal.literals if (pair := _contained(lit, world, label_of))]
+    await world.sleep(settle)  # returns at once if the world has stopped
+    deadline = world.snapshot.time + rest_within
+    while world.snapshot.time < deadline and world.failure is None:
+        if all(_at_rest(world, t) for t in things):
+            break
+        await world.sleep(0.1)
     checks = []
     for lit in goal.literals:
         physics, detail = _physics(lit, world, label_of)

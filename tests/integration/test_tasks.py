@@ -352,7 +352,7 @@ def test_cli_submit_verify_and_an_unsolvable_goal(site: Site) -> None:
 def test_cli_plan_dry_run_and_emit_pddl(site: Site) -> None:
     out = site.folder / "pddl"
     planned = site.skimesh(
-        "task", "plan", "--goal", "contain(kit-r1, gear-7)", "--emit-pddl", str(out)
+        "task", "plan", "--goal", "contain(kit-r1, gear-13)", "--emit-pddl", str(out)
     )
     assert planned.returncode == 0, planned.stdout + planned.stderr
     assert "pick" in planned.stdout and "place" in planned.stdout, planned.stdout

@@ -43,6 +43,7 @@ async def test_door_opens_and_closes(world: SimWorld) -> None:
     state = await oven.state()
     assert state.door_open and state.door_angle == pytest.approx(1.75, abs=0.03)
     assert seen[-1] == 1.0
+
     # The open door swings out of the cavity, never into it: the door panel's centre lies in
     # front of the housing's front face (the microwave faces +x in its own frame).
     def panel_forward(model: Any, data: Any) -> float:

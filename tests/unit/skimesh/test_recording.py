@@ -185,7 +185,10 @@ def test_task_events_go_to_the_task_log_the_plan_and_the_robots(tmp_path: Path) 
     assert events[-1].startswith("task t-1 failed: 0 steps run, 0 replans")
     assert "| 1 | r1 | `pick(object=gear)` | 0 |" in texts["/task/plan"][0]
     skill = texts["/robots/robot-1/skill"]
-    assert skill[:2] == ["step 0 navigate(goal=Station-1)", "step 0 navigate [executing] driving"]
+    assert skill[:2] == [
+        "step 0 navigate(goal=Station-1) started",
+        "step 0 navigate [executing] driving",
+    ]
     assert skill[2] == "step 0 navigate FAILED (execution): blocked"
     assert texts["/world_model/changes"] == ["rev 3 by r1: no change"]
     assert texts["/demo/log"] == ["hello"]
