@@ -12,6 +12,7 @@ Inside a child, :func:`emit` writes a line and :func:`stdin_lines` reads command
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import json
 import math
@@ -340,3 +341,21 @@ async def stdin_lines() -> AsyncIterator[str]:
             if line is None:
                 return
             yield line
+
+
+def child_router(args: argparse.Namespace) -> int:
+    """A benchmark's router child (``--role router --listen ENDPOINT``): a Zenoh router until
+    its stdin closes; prints ``{"ready": endpoint}`` once it listens."""
+    from meshlink import run_router
+    from skimesh.runtime import run_service
+
+    async def main() -> int:
+        async with anyio.create_task_group() as tg:
+            await tg.start(run_router, [args.listen])
+            emit({"ready": args.listen})
+            async for _ in stdin_lines():
+                pass
+            tg.cancel_scope.cancel()
+        return 0
+
+    return run_service(main)

@@ -43,6 +43,7 @@ from benchmarks.common import (
     Row,
     Stats,
     calibrate,
+    child_router,
     emit,
     format_table,
     load_average,
@@ -50,7 +51,7 @@ from benchmarks.common import (
     stdin_lines,
     summarize,
 )
-from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, run_router, to_zenoh_config
+from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, to_zenoh_config
 from meshlink.bridge import call0, undeclare
 from meshlink.testing import free_port
 from skill_agent.client import AgentClient
@@ -92,19 +93,6 @@ def echo_keys(mesh: str) -> tuple[str, str]:
 
 
 # =========================================================================== child roles
-
-
-def child_router(args: argparse.Namespace) -> int:
-    async def main() -> int:
-        async with anyio.create_task_group() as tg:
-            await tg.start(run_router, [args.listen])
-            emit({"ready": args.listen})
-            async for _ in stdin_lines():
-                pass
-            tg.cancel_scope.cancel()
-        return 0
-
-    return run_service(main)
 
 
 def child_store(args: argparse.Namespace) -> int:

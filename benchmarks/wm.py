@@ -50,6 +50,7 @@ from benchmarks.common import (
     Row,
     Stats,
     calibrate,
+    child_router,
     cpu_seconds,
     emit,
     format_grid,
@@ -59,7 +60,7 @@ from benchmarks.common import (
     stdin_lines,
     summarize,
 )
-from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, run_router, to_zenoh_config
+from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, to_zenoh_config
 from meshlink.bridge import call0, undeclare
 from meshlink.testing import free_port
 from skimesh.runtime import run_service
@@ -135,19 +136,6 @@ def raw_keys(mesh: str) -> tuple[str, str, str]:
     """Keys of the raw get, the raw put and the meshlink (anyio bridge) echo."""
     base = f"skimesh/{mesh}/bench"
     return f"{base}/rtt", f"{base}/oneway", f"{base}/rtt-bridge"
-
-
-def child_router(args: argparse.Namespace) -> int:
-    async def main() -> int:
-        async with anyio.create_task_group() as tg:
-            await tg.start(run_router, [args.listen])
-            emit({"ready": args.listen})
-            async for _ in stdin_lines():
-                pass
-            tg.cancel_scope.cancel()
-        return 0
-
-    return run_service(main)
 
 
 def child_echo(args: argparse.Namespace) -> int:
