@@ -34,19 +34,17 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
+from task_agent.verify_scene import SceneView
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
-    Element,
     Op,
     Pose,
     Position,
-    Query,
     Relation,
     SetRelation,
     Value,
 )
-from wm_store.query import match_relations, resolve
 from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec, registration_ops
 from wm_store.state import SceneState
 from wm_store.transactions import apply_transaction
@@ -167,35 +165,6 @@ OPEN_DOOR = SkillDescription(
 )
 
 _json = msgspec.json.Encoder()
-
-
-class SceneView:
-    """A synchronous :class:`skill_agent.skill.WorldView` over a scene (what a WmClient's
-    replica offers, without the client)."""
-
-    def __init__(self, state: SceneState, ontology: Ontology) -> None:
-        self.state, self._ontology = state, ontology
-
-    @property
-    def ontology(self) -> Ontology:
-        return self._ontology
-
-    def get_element(self, element_id: str) -> Element:
-        element = self.state.get(element_id)
-        if element is None:
-            raise KeyError(element_id)
-        return element
-
-    def find_element(self, element_id: str) -> Element | None:
-        return self.state.get(element_id)
-
-    def resolve_element(self, query: Query | None = None, *, type: str = "") -> list[Element]:
-        return resolve(self.state, self._ontology, query or Query(type=type))
-
-    def query_relation(
-        self, subject: str = "", predicate: str = "", obj: str = ""
-    ) -> list[Relation]:
-        return match_relations(self.state, self._ontology, subject, predicate, obj)
 
 
 class KittingScene(msgspec.Struct, kw_only=True):

@@ -42,22 +42,20 @@ from skill_agent.protocol import (
     RelationCond,
 )
 from skill_agent.skill import WorldView
+from task_agent.verify_scene import SceneView as PrivateScene
 from wm_store.client import WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
-    Element,
     Op,
     Pose,
     Position,
-    Query,
     Relation,
     SetRelation,
     UnsetRelation,
     UpdateElement,
     Value,
 )
-from wm_store.query import match_relations, resolve
 from wm_store.service import WmService
 from wm_store.state import SceneState
 from wm_store.store import WmStore
@@ -67,38 +65,19 @@ from wm_store.transport import InMemoryTransport
 ONTOLOGY = Ontology.default()
 
 
-class SceneView:
-    """A WorldView over a private SceneState (as the task layer's symbolic simulation has)."""
+class SceneView(PrivateScene):
+    """A WorldView over a private SceneState (the task layer's symbolic-simulation view), plus
+    a helper to apply ops to it."""
 
     def __init__(self, ontology: Ontology = ONTOLOGY) -> None:
-        self.state = SceneState()
-        self.state.set_spatial_predicates(n for n, r in ontology.relations.items() if r.spatial)
-        self._ontology = ontology
-
-    @property
-    def ontology(self) -> Ontology:
-        return self._ontology
+        state = SceneState()
+        state.set_spatial_predicates(n for n, r in ontology.relations.items() if r.spatial)
+        super().__init__(state, ontology)
 
     def apply(self, ops: Sequence[Op]) -> dict[str, str]:
         self.state.revision += 1
-        result = apply_transaction(self.state, self._ontology, ops, revision=self.state.revision)
+        result = apply_transaction(self.state, self.ontology, ops, revision=self.state.revision)
         return result.ids
-
-    def get_element(self, element_id: str) -> Element:
-        element = self.state.get(element_id)
-        assert element is not None
-        return element
-
-    def find_element(self, element_id: str) -> Element | None:
-        return self.state.get(element_id)
-
-    def resolve_element(self, query: Query | None = None, *, type: str = "") -> list[Element]:
-        return resolve(self.state, self._ontology, query or Query(type=type))
-
-    def query_relation(
-        self, subject: str = "", predicate: str = "", obj: str = ""
-    ) -> list[Relation]:
-        return match_relations(self.state, self._ontology, subject, predicate, obj)
 
 
 KITTING = [
