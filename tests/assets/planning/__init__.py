@@ -1,6 +1,8 @@
 """Planning test assets: a synchronous world view over a scene, kitting skill descriptions
 as the standard library will offer them, and scene builders (``tests.assets.planning``)."""
 
+from task_agent.verify_scene import SceneView
+
 from .kitting import (
     NAVIGATE,
     OPEN_DOOR,
@@ -8,7 +10,6 @@ from .kitting import (
     PLACE,
     TAKE_OUT,
     KittingScene,
-    SceneView,
     add_microwave,
     apply_ops,
     kitting_scene,

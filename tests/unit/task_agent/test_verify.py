@@ -28,7 +28,6 @@ from task_agent.protocol import Sequence as Seq
 from task_agent.taskfile import load_task_file, read_task_file
 from task_agent.verify import check, verify
 from task_agent.verify_scene import SceneView
-from tests.assets.planning.kitting import SceneView as PlainView
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Query, Relation, UpdateElement, Value
 from wm_store.state import SceneState
@@ -609,7 +608,7 @@ def test_custom_conditions_are_left_to_run_time(kitting: World) -> None:
 
 
 def test_any_world_view_works_and_empty_tasks_are_structure_problems(kitting: World) -> None:
-    plain = PlainView(kitting.view.state, kitting.view.ontology)
+    plain = SceneView(kitting.view.state, kitting.view.ontology)
     task = seq(call("r1", "navigate", goal="Station-1"), call("r1", "pick", object="Gear-1"))
     assert verify(task, plain, kitting.agents) == []
     empty = verify(TaskFile(root=Parallel(children=[])), plain, kitting.agents)
