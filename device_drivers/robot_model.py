@@ -32,12 +32,11 @@ import numpy as np
 
 from device_drivers.errors import ModelError
 from device_drivers.gripper_model import add_gripper_drive, add_parallel_gripper
+from device_drivers.menagerie import add_mjcf_arm
+from device_drivers.physics_options import TIMESTEP, configure_physics
 from device_drivers.robot_spec import Pose2D, RobotSpec, robot_layout
 
-__all__ = ["TIMESTEP", "build_base", "build_robot", "build_world", "configure_physics"]
-
-TIMESTEP = 0.002
-"""Physics step of every generated model, s."""
+__all__ = ["TIMESTEP", "build_robot", "build_world", "configure_physics"]
 
 _CLEARANCE = 0.04  # chassis bottom above the floor, m
 _WHEEL_RADIUS = 0.06
@@ -66,17 +65,6 @@ _ARM_RANGE: dict[str, float] = {  # symmetric joint limits, rad
 _BASE_GAINS = {"xy": (8000.0, 500.0), "yaw": (3000.0, 200.0)}  # kp, force limit
 
 
-def configure_physics(spec: mujoco.MjSpec) -> None:
-    """Set the options every generated model shares (identical values, so attaching a robot to
-    a world raises no option conflict): 2 ms step, implicit-fast integrator (implicit servo and
-    joint damping), elliptic friction cones with ``impratio`` 10 (grasps slip less), radians."""
-    spec.compiler.degree = False
-    spec.option.timestep = TIMESTEP
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10.0
-
-
 _BOX = mujoco.mjtGeom.mjGEOM_BOX
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
 _CYLINDER = mujoco.mjtGeom.mjGEOM_CYLINDER
@@ -90,19 +78,33 @@ def build_robot(
 ) -> mujoco.MjSpec:
     """Generate robot ``spec.name`` as a stand-alone :class:`mujoco.MjSpec` (see module doc).
 
-    ``prefix`` starts every element name (default ``spec.prefix``, i.e. ``"<name>/"``); the
-    world builds robots with ``""`` and adds the prefix when it attaches them. ``at`` is the
-    initial base pose in the world frame (default: the origin); it becomes the ``ref`` of the
-    base joints, so that joint values stay absolute world coordinates. Export the robot for IK
-    with ``at=None``. Raises :class:`ModelError` if the spec does not compile.
+    ``prefix`` starts every element name (default ``spec.prefix``, i.e. ``"<name>/"``). ``at``
+    is the initial base pose in the world frame (default: the origin); it becomes the ``ref``
+    of the base joints, so that joint values stay absolute world coordinates. Export the robot
+    for IK with ``at=None``. With ``spec.mjcf`` the arm and gripper come from MJCF files,
+    attached at the site ``<prefix>arm_mount`` on top of the pedestal
+    (:func:`device_drivers.menagerie.add_mjcf_arm`). Raises :class:`ModelError` if the spec does
+    not compile.
     """
-    at = at or Pose2D()
-    names = robot_layout(spec, prefix)
-    p = names.prefix
     mj = mujoco.MjSpec()
     mj.modelname = spec.name
     configure_physics(mj)
+    _add_robot(mj, spec, spec.prefix if prefix is None else prefix, at or Pose2D())
+    _check_compiles(mj, spec.name)
+    return mj
+
+
+def _add_robot(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> None:
+    """Add robot ``spec`` with element prefix ``p`` at base pose ``at`` to ``mj``."""
+    names = robot_layout(spec, p)
     base = _add_base(mj, spec, p, at)
+    if spec.mjcf is not None:
+        top = spec.base_height + spec.pedestal_height
+        base.add_site(name=f"{p}arm_mount", pos=[spec.arm_mount_x, 0, top], size=[0.02, 0, 0])
+        for jname in names.base_joints:
+            _add_servo(mj, jname, jname.removeprefix(p))
+        add_mjcf_arm(mj, spec.mjcf, names)
+        return
 
     # Arm: link lengths along +z at joint value 0.
     top = spec.base_height + spec.pedestal_height
@@ -145,38 +147,6 @@ def build_robot(
     for jname in names.servo_joints:
         _add_servo(mj, jname, jname.removeprefix(p))
     add_gripper_drive(mj, spec, p)
-    _check_compiles(mj, spec.name)
-    return mj
-
-
-def build_base(
-    spec: RobotSpec,
-    prefix: str | None = None,
-    *,
-    at: Pose2D | None = None,
-    into: mujoco.MjSpec | None = None,
-) -> mujoco.MjSpec:
-    """The holonomic base of :func:`build_robot` alone (chassis, pedestal, base joints and
-    their servos), with a site ``<prefix>arm_mount`` on top of the pedestal (z up, x forward)
-    where another arm model can be attached (see ``device_drivers.menagerie``).
-
-    With ``into`` (e.g. a world from :func:`build_world`) the base is added to that spec's world
-    body, which is returned uncompiled; otherwise a new spec is returned, compiled once.
-    """
-    at = at or Pose2D()
-    p = spec.prefix if prefix is None else prefix
-    mj = into if into is not None else mujoco.MjSpec()
-    if into is None:
-        mj.modelname = spec.name
-        configure_physics(mj)
-    base = _add_base(mj, spec, p, at)
-    top = spec.base_height + spec.pedestal_height
-    base.add_site(name=f"{p}arm_mount", pos=[spec.arm_mount_x, 0, top], size=[0.02, 0, 0])
-    for jname in robot_layout(spec, p).base_joints:
-        _add_servo(mj, jname, jname.removeprefix(p))
-    if into is None:
-        _check_compiles(mj, spec.name)
-    return mj
 
 
 def _add_base(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> mujoco.MjsBody:
@@ -339,8 +309,7 @@ def build_world(
         name="sun", pos=[0, 0, 4], dir=[0.2, 0.3, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
     )
     for spec, pose in robots:
-        frame = world.worldbody.add_frame()
-        world.attach(build_robot(spec, "", at=pose), frame=frame, prefix=spec.prefix)
+        _add_robot(world, spec, spec.prefix, pose)
     for name, extra in (extras or {}).items():
         world.attach(extra, frame=world.worldbody.add_frame(), prefix=f"{name}/")
     _check_compiles(world, "world")

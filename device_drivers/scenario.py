@@ -85,9 +85,11 @@ class Placement(Struct, frozen=True, forbid_unknown_fields=True):
 
 
 class RobotEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
-    """A generated mobile manipulator (:class:`RobotSpec` fields under ``model``). Its devices
-    are ``arm``, ``gripper`` and ``base`` (world-model labels ``<name>-arm`` ...), plus any
-    sensor mounted on it."""
+    """A mobile manipulator (:class:`RobotSpec` fields under ``model``): generated, or with its
+    arm and gripper from MJCF files (``[robots.model.mjcf]``, :class:`~device_drivers.
+    robot_spec.MjcfArm`; an empty table means Menagerie's UR5e + Robotiq 2F-85, relative file
+    paths are resolved against the scenario file). Its devices are ``arm``, ``gripper`` and
+    ``base`` (world-model labels ``<name>-arm`` ...), plus any sensor mounted on it."""
 
     name: Label
     type: str = "MobileManipulator"

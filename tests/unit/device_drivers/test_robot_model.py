@@ -41,7 +41,9 @@ def test_robot_compiles_with_documented_names(robot_model: Any, layout: RobotLay
     sites = set(_names(robot_model, "site", robot_model.nsite))
     assert {layout.tcp_site, layout.base_site, layout.deck_site, *layout.camera_sites} <= sites
     assert set(layout.camera_sites) <= set(_names(robot_model, "camera", robot_model.ncam))
-    assert set(layout.pad_geoms) <= set(_names(robot_model, "geom", robot_model.ngeom))
+    assert {*layout.pad_geoms[0], *layout.pad_geoms[1]} <= set(
+        _names(robot_model, "geom", robot_model.ngeom)
+    )
     # one joint per body: placo merges several joints of one body into one
     assert len(set(robot_model.jnt_bodyid)) == robot_model.njnt
     assert all(robot_model.jnt_limited[robot_model.joint(j).id] for j in layout.arm_joints)

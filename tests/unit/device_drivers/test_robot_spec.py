@@ -5,7 +5,15 @@ from __future__ import annotations
 import msgspec
 import pytest
 
-from device_drivers.robot_spec import ARM_JOINTS_6, ARM_JOINTS_7, Pose2D, RobotSpec, robot_layout
+from device_drivers.robot_spec import (
+    ARM_JOINTS_6,
+    ARM_JOINTS_7,
+    UR5E_JOINTS,
+    MjcfArm,
+    Pose2D,
+    RobotSpec,
+    robot_layout,
+)
 
 
 def test_defaults_decode_from_empty_table() -> None:
@@ -43,4 +51,15 @@ def test_layout_names_are_prefixed() -> None:
 def test_layout_seven_dof_and_custom_prefix() -> None:
     names = robot_layout(RobotSpec(name="r2", arm_dof=7), prefix="")
     assert names.arm_joints == ARM_JOINTS_7
-    assert names.pad_geoms == ("left_pad", "right_pad")
+    assert names.pad_geoms == (("left_pad",), ("right_pad",))
+    assert names.hand_body == "gripper" and names.gripper_tendon == "gripper"
+
+
+def test_mjcf_layout_names_file_elements_under_the_robot() -> None:
+    names = robot_layout(RobotSpec(name="r3", mjcf=MjcfArm()))
+    assert names.arm_joints == tuple(f"r3/{j}" for j in UR5E_JOINTS)
+    assert names.base_joints == robot_layout(RobotSpec(name="r3")).base_joints
+    assert names.tcp_site == "r3/gripper/pinch" and names.hand_body == "r3/gripper/base"
+    assert names.pad_geoms[0] == ("r3/gripper/left_pad1", "r3/gripper/left_pad2")
+    assert names.gripper_actuator == "r3/gripper/fingers_actuator" and not names.gripper_tendon
+    assert msgspec.convert({"mjcf": {}}, RobotSpec).mjcf == MjcfArm()
