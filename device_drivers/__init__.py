@@ -41,6 +41,7 @@ from device_drivers.interfaces import ProgressCallback as ProgressCallback
 from device_drivers.interfaces import WorldPose as WorldPose
 from device_drivers.placement import object_centres as object_centres
 from device_drivers.placement import resolve_placements as resolve_placements
+from device_drivers.robot_spec import MjcfArm as MjcfArm
 from device_drivers.robot_spec import Pose2D as Pose2D
 from device_drivers.robot_spec import RobotLayout as RobotLayout
 from device_drivers.robot_spec import RobotSpec as RobotSpec
@@ -69,6 +70,7 @@ __all__: list[str] = [
     "IKOptions",
     "IKResult",
     "IKSolver",
+    "MjcfArm",
     "MobileBase",
     "ModelError",
     "MotionError",
