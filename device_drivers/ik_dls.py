@@ -30,8 +30,7 @@ from device_drivers.ik import (
     rotation_error_vector,
     solve_with_restarts,
 )
-from device_drivers.robot_model import build_robot
-from device_drivers.robot_spec import RobotSpec, robot_layout
+from device_drivers.ik_chain import ChainSolver
 
 __all__ = ["DlsIK"]
 
@@ -42,7 +41,7 @@ _FADE = 0.05  # below this error score (m), the damping fades: quadratic converg
 _ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
-class DlsIK:
+class DlsIK(ChainSolver):
     """Damped least squares on a private copy of a MuJoCo model.
 
     ``robot`` is an ``MjSpec`` (compiled here) or an ``MjModel`` — a robot alone or a whole
@@ -87,23 +86,6 @@ class DlsIK:
         )
         self._jacp = np.zeros((3, self._model.nv))
         self._jacr = np.zeros((3, self._model.nv))
-
-    @classmethod
-    def for_robot(cls, spec: RobotSpec, options: IKOptions | None = None) -> DlsIK:
-        """A solver for a generated robot (built alone; base joints = world coordinates)."""
-        names = robot_layout(spec)
-        return cls(
-            build_robot(spec),
-            tcp_site=names.tcp_site,
-            arm_joints=names.arm_joints,
-            base_joints=names.base_joints,
-            options=options,
-        )
-
-    @property
-    def chain(self) -> tuple[str, ...]:
-        """Base joints then arm joints: the order of every internal vector."""
-        return self.base_joints + self.arm_joints
 
     def _id(self, kind: int, name: str, what: str) -> int:
         index = int(mujoco.mj_name2id(self._model, kind, name))

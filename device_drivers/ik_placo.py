@@ -32,16 +32,15 @@ from device_drivers.ik import (
     random_configurations,
     solve_with_restarts,
 )
+from device_drivers.ik_chain import ChainSolver
 from device_drivers.placo_export import IK_ROOT, load_placo_robot
-from device_drivers.robot_model import build_robot
-from device_drivers.robot_spec import RobotSpec, robot_layout
 
 __all__ = ["PlacoIK"]
 
 _FADE = 0.05  # below this error score (m), the regularisation weight fades quadratically
 
 
-class PlacoIK:
+class PlacoIK(ChainSolver):
     """placo IK for one robot model. ``robot`` is the robot alone as an ``MjSpec``; targets are
     in its world frame (for the generated robots: the world frame of the scene)."""
 
@@ -56,9 +55,13 @@ class PlacoIK:
         base_joints: Sequence[str] = (),
         options: IKOptions | None = None,
     ) -> None:
-        self.options = options or IKOptions()
-        self.arm_joints = tuple(arm_joints)
-        self.base_joints = tuple(base_joints)
+        super().__init__(
+            robot,
+            tcp_site=tcp_site,
+            arm_joints=arm_joints,
+            base_joints=base_joints,
+            options=options,
+        )
         self._tcp = tcp_site
         # placo objects: untyped (Any) from here on; they never leave this instance.
         self._robot: Any = load_placo_robot(robot)
@@ -83,23 +86,6 @@ class PlacoIK:
         self._arm_restarts = random_configurations(
             self._lower[n_base:], self._upper[n_base:], self.options.restarts, self.options.seed
         )
-
-    @classmethod
-    def for_robot(cls, spec: RobotSpec, options: IKOptions | None = None) -> PlacoIK:
-        """A solver for a generated robot (built alone; base joints = world coordinates)."""
-        names = robot_layout(spec)
-        return cls(
-            build_robot(spec),
-            tcp_site=names.tcp_site,
-            arm_joints=names.arm_joints,
-            base_joints=names.base_joints,
-            options=options,
-        )
-
-    @property
-    def chain(self) -> tuple[str, ...]:
-        """Base joints then arm joints: the order of every internal vector."""
-        return self.base_joints + self.arm_joints
 
     def tcp_pose(self, q: Mapping[str, float]) -> tuple[FloatArray, FloatArray]:
         """placo's forward kinematics: tcp position (m) and rotation matrix, model frame."""
