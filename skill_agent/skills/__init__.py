@@ -1,5 +1,5 @@
 """The standard skill library: navigate, locate, pick / take_out, place / serve / put_in, door
-skills for an arm and for a smart appliance, heat.
+skills for an arm and for a smart appliance, heat, operate (an appliance's buttons).
 
 Each skill is a :class:`~skill_agent.skill.Skill` subclass with a full description (parameters
 typed by ontology classes, pre / hold / post conditions in the SkiROS style), sensing in
@@ -20,6 +20,8 @@ module             skills (name: class)                             used by
 ``appliance``      open_door / close_door / heat:                   a smart appliance's agent
                    :class:`ApplianceOpenDoor`,
                    :class:`ApplianceCloseDoor`, :class:`Heat`
+``operate``        operate / operate_stop (press start / stop):     a smart appliance's agent
+                   :class:`Operate`, :class:`OperateStop`
 =================  ===============================================  ===========================
 
 Every pre- and post-condition has a symbolic face for the planner except those listed in
@@ -35,6 +37,8 @@ from .doors import ArmOpenDoor as ArmOpenDoor
 from .locate import Locate as Locate
 from .locate import locate_object as locate_object
 from .navigate import Navigate as Navigate
+from .operate import Operate as Operate
+from .operate import OperateStop as OperateStop
 from .pick import Pick as Pick
 from .pick import TakeOut as TakeOut
 from .place import Place as Place
@@ -52,6 +56,8 @@ __all__ = [
     "Heat",
     "Locate",
     "Navigate",
+    "Operate",
+    "OperateStop",
     "Pick",
     "Place",
     "PutIn",
@@ -73,6 +79,8 @@ ALL_SKILLS = (
     ApplianceOpenDoor,
     ApplianceCloseDoor,
     Heat,
+    Operate,
+    OperateStop,
 )
 """Every skill class of the library."""
 

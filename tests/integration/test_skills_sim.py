@@ -2,7 +2,8 @@
 scenarios: a part picked and placed into the kit box with real physics and attachment (the
 world model and the world's ground truth agree), a sensed pose written with its source, a part
 dropped mid-carry detected as a failure, a stop mid-motion that halts the arm, the microwave
-agent's door and heat skills, and the meal box served on the tray with a side grasp."""
+agent's door, heat and button (operate / operate_stop) skills, and the meal box served on the
+tray with a side grasp."""
 
 from __future__ import annotations
 
@@ -16,9 +17,11 @@ import numpy as np
 import pytest
 
 from device_drivers.drivers import sim_devices
+from device_drivers.interfaces import Appliance
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import SimWorld, WorldOptions, running_world
 from skill_agent.core import AgentCore, SkillEntry
+from skill_agent.errors import PreconditionError
 from skill_agent.protocol import Progress, RunEvent, RunResult, StartRun
 from skill_agent.scenario_wm import scenario_ops
 from skill_agent.skill import Skill
@@ -28,6 +31,8 @@ from skill_agent.skills import (
     Heat,
     Locate,
     Navigate,
+    Operate,
+    OperateStop,
     Pick,
     Place,
     Serve,
@@ -248,6 +253,44 @@ async def test_the_microwave_agent_opens_and_closes_its_door(meal: Sim) -> None:
         empty = await run(agent, "heat", object=sim["MealBox-1"])  # the world model is wrong
     assert not empty.success and "not in the appliance" in empty.message
     assert not (await oven.state()).heating  # type: ignore[attr-defined]
+
+
+async def test_the_microwave_buttons_start_and_stop_its_heater(meal: Sim) -> None:
+    sim = meal
+    oven = sim_devices(sim.world, "Microwave-1")[("Microwave-1", "appliance")]
+    assert isinstance(oven, Appliance)
+    skills = (ApplianceOpenDoor, ApplianceCloseDoor, Operate, OperateStop)
+    async with sim.agent("Microwave-1", *skills) as agent:
+        assert (await run(agent, "open_door")).success
+        with pytest.raises(PreconditionError, match="doorOpen"):
+            await agent.start(StartRun(skill="operate"))
+        assert not (await oven.state()).heating
+        assert (await run(agent, "close_door")).success
+        started = await run(agent, "operate")
+        assert started.success, started.message
+        state = await oven.state()
+        assert state.heating and 0.0 < state.remaining <= 30.0  # the scenario's default time
+        assert sim.wm.get_element(sim["Microwave-1"]).properties[Prop.heating] is True
+        stopped = await run(agent, "operate_stop")
+        assert stopped.success, stopped.message
+    assert not (await oven.state()).heating
+    assert sim.wm.get_element(sim["Microwave-1"]).properties[Prop.heating] is False
+
+
+async def test_heating_started_by_operate_ends_by_itself(meal: Sim) -> None:
+    sim = meal
+    oven = sim_devices(sim.world, "Microwave-1")[("Microwave-1", "appliance")]
+    assert isinstance(oven, Appliance)
+    async with sim.agent("Microwave-1", Operate) as agent:
+        assert (await run(agent, "operate")).success
+        remaining = (await oven.state()).remaining
+        with anyio.fail_after(60):
+            await sim.world.sleep(remaining + 0.1)  # simulated time: the heater's own timer
+        assert not (await oven.state()).heating
+        assert sim.wm.get_element(sim["Microwave-1"]).properties[Prop.heating] is True  # stale
+        again = await run(agent, "operate")  # the stale heating = true is read from the oven
+        assert again.success, again.message
+    assert (await oven.state()).heating
 
 
 async def test_the_meal_box_is_served_on_the_tray(meal: Sim) -> None:
