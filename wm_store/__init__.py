@@ -4,7 +4,7 @@ key-value store that publishes every change, and an async client that keeps a lo
 Layers inside the package (pure core first, adapters last)::
 
     protocol, errors           wire schema and error tree
-    ontology, vocab            the OWL ontology loaded with rdflib, name constants
+    ontology*, vocab           the OWL ontology loaded with rdflib, name constants
     state, transactions,       scene graph + indexes, validated all-or-nothing transactions,
     query, resolution          resolve/relations, multi-source property resolution
     rdf, sparql, reasoners     Turtle import/export, read-only SPARQL, spatial/similarity reasoners
