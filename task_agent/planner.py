@@ -1,4 +1,5 @@
-"""Planning through unified-planning: the task layer's only contact with planner libraries.
+"""Planning through unified-planning: with the ``planner_*`` modules next to it, the task
+layer's only contact with planner libraries.
 
 :class:`Planner` solves a :class:`~task_agent.domain.PlanningTask` with Kairos (default,
 in-process) or Fast Downward (``engine="fast-downward"``, a child process per call), within a
@@ -17,13 +18,17 @@ and why (:func:`~task_agent.reachability.diagnose`); running out of time raises
 :class:`~task_agent.errors.PlanningError` with the engine's log.
 
 unified-planning has process-wide defaults (``get_environment()`` and its engine factory);
-this module never touches them. Each :class:`Planner` builds its problems in its own
+these modules never touch them. Each :class:`Planner` builds its problems in its own
 ``Environment``, used by one solve at a time (a lock) and replaced every
 :data:`ENVIRONMENT_SOLVES` solves, since an environment caches every expression ever built.
-Engines are instantiated directly (``KairosEngine``, ``FastDownwardPDDLPlanner``) and called
-through unified-planning's engine API: the factory's engine lookup and credits printing inspect
-the Python stack on every call (~12 ms each), and so does creating an environment.
-unified-planning is untyped: ``Any`` stays in this module.
+Creating an environment inspects the Python stack (~12 ms), as the engine factory would on
+every call (:mod:`~task_agent.planner_engines` instantiates engines directly).
+unified-planning is untyped: ``Any`` stays in the planner modules.
+
+The code: :mod:`~task_agent.planner_model` (:class:`Plan` and its steps),
+:mod:`~task_agent.planner_convert` (task to unified-planning problem, engine plan to steps),
+:mod:`~task_agent.planner_engines` (Kairos and Fast Downward) and :class:`Planner` here
+(environments, compression, fallback, errors).
 """
 
 from __future__ import annotations
@@ -31,38 +36,27 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections import OrderedDict
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import anyio
 import msgspec
 from unified_planning.engines import PlanGenerationResultStatus as Status
 from unified_planning.environment import Environment
-from unified_planning.exceptions import UPException
 from unified_planning.io import PDDLWriter
-from unified_planning.model import (
-    Fluent,
-    InstantaneousAction,
-    Object,
-    Problem,
-    ProblemKind,
-    Variable,
-)
-from unified_planning.model.problem_kind_versioning import LATEST_PROBLEM_KIND_VERSION
-from unified_planning.plans import ActionInstance, SequentialPlan
-from up_fast_downward import FastDownwardPDDLPlanner
-from up_kairos import KairosEngine
 
 from skill_agent.conditions import ConditionRegistry
 from skill_agent.skill import WorldView
 
 from .discovery_model import AgentInfo
-from .domain import ROOT, PlanningTask
+from .domain import PlanningTask
 from .errors import PlannerTimeoutError, PlanningError, UnsolvableError
 from .goals import Goal
-from .reachability import GroundStep, diagnose, relevant_objects, replay
+from .planner_convert import plan_steps, to_unified_planning, to_up_plan
+from .planner_engines import FD_SEARCH, SOLVED, UNSOLVABLE, solve_problem
+from .planner_model import Engine, Plan, PlanStats, PlanStep
+from .reachability import diagnose, relevant_objects, replay
 
 __all__ = [
     "COMPRESS_BELOW",
@@ -77,209 +71,11 @@ __all__ = [
     "to_up_plan",
 ]
 
-Engine = Literal["kairos", "fast-downward"]
 ENVIRONMENT_SOLVES = 32
 """Solves per unified-planning environment before a planner starts a fresh one."""
 COMPRESS_BELOW = 0.5
 """Compress only when the goal names fewer than this share of the task's objects: a goal
 naming most of them keeps nearly all the others too, and the analysis costs 10-20 ms."""
-
-
-class PlanStep(msgspec.Struct, frozen=True, kw_only=True):
-    """One skill run: who, what, with which parameters (skill parameter -> element id,
-    hardware included; parameters left out are inferred by the agent)."""
-
-    index: int
-    action: str
-    agent: str
-    skill: str
-    args: tuple[str, ...]
-    """The action's arguments, in the order of its parameters."""
-    params: dict[str, str]
-    duration: float
-
-    @property
-    def ground(self) -> GroundStep:
-        return GroundStep(self.action, self.args)
-
-    def __str__(self) -> str:
-        args = ", ".join(f"{k}={v}" for k, v in self.params.items())
-        return f"{self.agent}: {self.skill}({args})"
-
-
-class PlanStats(msgspec.Struct, frozen=True, kw_only=True):
-    engine: str
-    objects: int
-    """Objects of the full task."""
-    objects_solved: int
-    """Objects of the task the engine solved (fewer when compression applied)."""
-    fallback: bool = False
-    """The compressed task failed and the full task was solved."""
-    convert_s: float = 0.0
-    """Building the unified-planning problem."""
-    solve_s: float = 0.0
-    """The engine call through unified-planning (PDDL writing, parsing, search)."""
-    engine_s: float = math.nan
-    """The engine's own figure for its work, when it reports one."""
-    total_s: float = 0.0
-
-
-class Plan(msgspec.Struct, frozen=True, kw_only=True):
-    steps: tuple[PlanStep, ...]
-    task: PlanningTask
-    stats: PlanStats
-
-    @property
-    def duration(self) -> float:
-        """Estimated seconds when the steps run one after the other."""
-        return sum(s.duration for s in self.steps)
-
-    def __str__(self) -> str:
-        return "\n".join(f"{s.index + 1:3d}. {s}" for s in self.steps) or "(empty plan)"
-
-
-# --------------------------------------------------------------------------- conversion
-
-
-class _Problem(Problem):  # type: ignore[misc]  # unified-planning is untyped
-    """A problem built once and then only read. Its ``kind`` is the one :func:`_kind` derives
-    from the task (unified-planning walks every expression for it, on every access: ~9
-    times and ~12 ms per solve; a test checks both agree), and ``initial_values`` holds the
-    explicit (true) facts only: every fluent is boolean with default false, so for the PDDL
-    writer this is the same, without enumerating every ground fluent (quadratic)."""
-
-    _kind_cache: Any = None
-
-    @property
-    def kind(self) -> Any:
-        if self._kind_cache is None:
-            self._kind_cache = Problem.kind.fget(self)
-        return self._kind_cache
-
-    @property
-    def initial_values(self) -> Any:
-        return dict(self.explicit_initial_values)
-
-
-def _kind(task: PlanningTask) -> Any:
-    """The unified-planning problem kind of ``task``'s problem, from what the generator
-    emits: typing, negated, existential and disjunctive (``empty``) preconditions, and
-    conditional ``forall`` deletes."""
-    kind = ProblemKind(version=LATEST_PROBLEM_KIND_VERSION)
-    kind.set_problem_class("ACTION_BASED")
-    kind.set_typing("FLAT_TYPING")
-    kind.set_typing("HIERARCHICAL_TYPING")
-    actions = task.actions.values()
-    negative = any(not lit.positive for a in actions for lit in a.pre)
-    negative |= any(positive for a in actions for _, _, positive in a.empty_pre)
-    negative |= any(not lit.positive for lit in task.goal)
-    if negative:
-        kind.set_conditions_kind("NEGATIVE_CONDITIONS")
-    if any(a.empty_pre for a in actions):
-        kind.set_conditions_kind("EXISTENTIAL_CONDITIONS")
-    if any(len(preds) > 1 for a in actions for preds, _, _ in a.empty_pre):
-        kind.set_conditions_kind("DISJUNCTIVE_CONDITIONS")
-    if any(a.forall_delete for a in actions):
-        kind.set_effects_kind("CONDITIONAL_EFFECTS")
-        kind.set_effects_kind("FORALL_EFFECTS")
-    return kind
-
-
-def to_unified_planning(task: PlanningTask, environment: Any = None) -> Any:
-    """``task`` as a unified-planning ``Problem`` in ``environment`` (default: a fresh one)."""
-    env = environment if environment is not None else Environment()
-    tm, em = env.type_manager, env.expression_manager
-    types: dict[str, Any] = {ROOT: tm.UserType(ROOT)}
-
-    def utype(name: str) -> Any:
-        if name not in types:
-            types[name] = tm.UserType(name, utype(task.types[name]))
-        return types[name]
-
-    for name in task.types:
-        utype(name)
-    problem = _Problem(task.name, env)
-    fluents: dict[str, Any] = {}
-    for p in task.predicates.values():
-        sig = OrderedDict((f"a{i}", types[ROOT]) for i in range(p.arity))
-        fluents[p.name] = Fluent(p.pddl, tm.BoolType(), sig, env)
-        problem.add_fluent(fluents[p.name], default_initial_value=False)
-    objects = {o: Object(o, utype(t), env) for o, t in task.objects.items()}
-    problem.add_objects(objects.values())
-    nodes = {o: em.ObjectExp(obj) for o, obj in objects.items()}
-
-    def fact(pred: str, args: Sequence[Any]) -> Any:
-        return em.FluentExp(fluents[pred], args)
-
-    w = Variable("w", types[ROOT], env)
-    w_node = em.VariableExp(w)
-    true, false = em.TRUE(), em.FALSE()
-    for schema in task.actions.values():
-        params = OrderedDict((n, utype(t) if t != ROOT else types[ROOT]) for n, t in schema.params)
-        action = InstantaneousAction(schema.name, params, env)
-        scope = {f"?{p.name}": em.ParameterExp(p) for p in action.parameters}
-        scope.update(nodes)
-
-        def node(a: str, scope: dict[str, Any] = scope) -> Any:
-            return scope[a]
-
-        for lit in schema.pre:
-            f = fact(lit.pred, [node(a) for a in lit.args])
-            action.add_precondition(f if lit.positive else em.Not(f))
-        for preds, arg, positive in schema.empty_pre:
-            some = em.Exists(em.Or([fact(p, [node(arg), w_node]) for p in preds]), w)
-            action.add_precondition(em.Not(some) if positive else some)
-        for lit in schema.delete:
-            action.add_effect(fact(lit.pred, [node(a) for a in lit.args]), false)
-        for fd in schema.forall_delete:
-            pair = [w_node, node(fd.fixed)] if fd.free_pos == 0 else [node(fd.fixed), w_node]
-            action.add_effect(fact(fd.delete, pair), false, fact(fd.cond, pair), forall=[w])
-        for lit in schema.add:
-            action.add_effect(fact(lit.pred, [node(a) for a in lit.args]), true)
-        problem.add_action(action)
-    for pred, args in task.init:
-        problem.set_initial_value(fact(pred, [nodes[a] for a in args]), true)
-    for lit in task.goal:
-        f = fact(lit.pred, [nodes[a] for a in lit.args])
-        problem.add_goal(f if lit.positive else em.Not(f))
-    problem._kind_cache = _kind(task)
-    return problem
-
-
-def to_up_plan(problem: Any, steps: Sequence[PlanStep]) -> Any:
-    """Our steps as a unified-planning ``SequentialPlan`` of ``problem`` (for its validators)."""
-    env = problem.environment
-    return SequentialPlan(
-        [
-            ActionInstance(
-                problem.action(s.action),
-                [env.expression_manager.ObjectExp(problem.object(a)) for a in s.args],
-            )
-            for s in steps
-        ],
-        env,
-    )
-
-
-def _steps(task: PlanningTask, up_plan: Any) -> list[PlanStep]:
-    out = []
-    for i, instance in enumerate(up_plan.actions):
-        schema = task.actions[instance.action.name]
-        args = tuple(p.object().name for p in instance.actual_parameters)
-        params = dict(schema.bound)
-        params.update((name, a) for (name, _), a in zip(schema.params, args, strict=True))
-        out.append(
-            PlanStep(
-                index=i,
-                action=schema.name,
-                agent=schema.agent,
-                skill=schema.skill,
-                args=args,
-                params=params,
-                duration=schema.duration,
-            )
-        )
-    return out
 
 
 class _Attempt(msgspec.Struct, kw_only=True):
@@ -289,61 +85,6 @@ class _Attempt(msgspec.Struct, kw_only=True):
     convert_s: float
     solve_s: float
     engine_s: float
-
-
-# --------------------------------------------------------------------------- the planner
-
-# lama-first (Fast Downward's default satisficing alias), except that its heuristics
-# over-approximate negated derived facts: ``empty`` preconditions are negated existentials,
-# which FD compiles into axioms, and computing their negations exactly multiplied the
-# relaxed operators 2000-fold (131k unary operators and 1.4 s for 2 robots x 8 parts,
-# 62 operators and 4 ms with this setting). Plans are still exact; only guidance changes.
-# (No spaces: up-fast-downward splits the configuration on whitespace.)
-FD_SEARCH = (
-    "let(hlm,eval_modify_costs(landmark_sum(lm_factory=lm_reasonable_orders_hps(lm_rhw()),"
-    "pref=false,axioms=approximate_negative),cost_type=one),"
-    "let(hff,eval_modify_costs(ff(axioms=approximate_negative),cost_type=one),"
-    "lazy_greedy([hff,hlm],preferred=[hff,hlm],cost_type=one,reopen_closed=false)))"
-)
-
-
-class _FastDownward(FastDownwardPDDLPlanner):  # type: ignore[misc]  # untyped
-    """Fast Downward with two fixes to how unified-planning 1.3 runs it.
-
-    - Its translator writes ``output.sas`` into the *caller's* working directory, so two
-      solves at once from one directory (two planners in threads, two test processes)
-      overwrite each other's file: one then fails or answers for the other problem. Here
-      the file goes next to the plan file, in the solve's own temporary directory.
-    - On a time-out unified-planning kills the process group but neither waits for it nor
-      closes its pipes (a zombie and two unclosed files per time-out); :meth:`reap` does both.
-    """
-
-    def _base_cmd(self, plan_filename: str) -> list[str]:
-        cmd: list[str] = super()._base_cmd(plan_filename)
-        return [*cmd, "--sas-file", str(Path(plan_filename).with_name("output.sas"))]
-
-    @property
-    def _process(self) -> Any:
-        return self.__dict__.get("_current")
-
-    @_process.setter
-    def _process(self, process: Any) -> None:
-        self.__dict__["_current"] = process
-        if process is not None:
-            self.__dict__["_started"] = process
-
-    def reap(self) -> None:
-        process = self.__dict__.pop("_started", None)
-        if process is None:
-            return
-        for stream in (process.stdout, process.stderr):
-            if stream is not None:
-                stream.close()
-        process.wait(timeout=10)
-
-
-_UNSOLVABLE = {Status.UNSOLVABLE_PROVEN, Status.UNSOLVABLE_INCOMPLETELY}
-_SOLVED = {Status.SOLVED_SATISFICING, Status.SOLVED_OPTIMALLY}
 
 
 class Planner:
@@ -383,25 +124,13 @@ class Planner:
         self._env_solves += 1
         return self._env
 
-    def _engine(self) -> Any:
-        if self.engine == "kairos":
-            return KairosEngine()
-        return _FastDownward(fast_downward_search_config=FD_SEARCH)
-
     def _attempt(self, task: PlanningTask, timeout: float) -> _Attempt:
         t0 = time.perf_counter()
         problem = to_unified_planning(task, self._environment())
         t1 = time.perf_counter()
-        with self._engine() as engine:
-            try:
-                result = engine.solve(problem, timeout=max(timeout, 0.001))
-            except UPException as exc:
-                raise PlanningError(f"{self.engine} failed: {exc}") from exc
-            finally:
-                if isinstance(engine, _FastDownward):
-                    engine.reap()
+        result = solve_problem(self.engine, problem, timeout)
         t2 = time.perf_counter()
-        steps = _steps(task, result.plan) if result.status in _SOLVED else []
+        steps = plan_steps(task, result.plan) if result.status in SOLVED else []
         log = "; ".join(str(m.message) for m in result.log_messages or ())
         engine_s = float(result.metrics.get("engine_internal_time", math.nan))
         return _Attempt(
@@ -433,12 +162,12 @@ class Planner:
         attempt = self._attempt(solved, self.timeout)
         fallback = False
         problem = "not solved"
-        if attempt.status in _SOLVED:
+        if attempt.status in SOLVED:
             _, problem = replay(task, [s.ground for s in attempt.steps])
         if solved is not task and problem and attempt.status != Status.TIMEOUT:
             fallback, solved = True, task
             attempt = self._attempt(task, deadline - time.perf_counter())
-            if attempt.status in _SOLVED:
+            if attempt.status in SOLVED:
                 _, problem = replay(task, [s.ground for s in attempt.steps])
         self._raise_for(attempt, task)
         if problem:
@@ -459,7 +188,7 @@ class Planner:
         return Plan(steps=tuple(attempt.steps), task=task, stats=stats)
 
     def _raise_for(self, attempt: _Attempt, task: PlanningTask) -> None:
-        if attempt.status in _SOLVED:
+        if attempt.status in SOLVED:
             return
         if attempt.status == Status.TIMEOUT:
             raise PlannerTimeoutError(
@@ -467,7 +196,7 @@ class Planner:
                 f"objects, {len(task.actions)} actions); give it more time or split the goal",
                 timeout=self.timeout,
             )
-        if attempt.status in _UNSOLVABLE:
+        if attempt.status in UNSOLVABLE:
             reason, unreachable = diagnose(task)
             proven = attempt.status == Status.UNSOLVABLE_PROVEN
             raise UnsolvableError(
