@@ -50,6 +50,11 @@ class ApplianceController(Controller):
         self.qadr, self.dadr = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
         self.act = model.actuator(f"{entry.label}/door").id
         self.objects = dict(objects)
+        self._labels = list(self.objects)  # the same, as arrays for contents()
+        bodies = [o.body for o in self.objects.values()]
+        self._lift = np.array([o.half[2] - o.bottom for o in self.objects.values()], dtype=float)
+        self._watched = np.array([*bodies, self.body], dtype=int)  # the objects, the housing
+        self._seen: tuple[np.ndarray[Any, Any], np.ndarray[Any, Any], list[str]] | None = None
         self.heat_job: Job | None = None
         self.heat_end = 0.0
         self.heat_period = 0.0
@@ -142,18 +147,26 @@ class ApplianceController(Controller):
         return abs(float(self.d.qvel[self.dadr])) < 0.02
 
     def contents(self) -> list[str]:
+        """The objects whose centre is inside the cavity (sorted labels). Every snapshot asks:
+        all objects are placed in the housing's frame at once, and the answer is kept until
+        one of them (or the housing) moves."""
+        labels, lift = self._labels, self._lift
+        if not labels:
+            return []
+        poses, xmat = self.d.xpos[self._watched], self.d.xmat[self._watched]
+        seen = self._seen
+        if seen is not None and np.array_equal(poses, seen[0]) and np.array_equal(xmat, seen[1]):
+            return list(seen[2])
         a = self.entry
-        rot = self.d.xmat[self.body].reshape(3, 3)
-        origin = self.d.xpos[self.body]
+        rot = xmat[-1].reshape(3, 3)
+        axes_z = xmat[:-1, 2::3]  # each object's z axis (the third column)
+        centres = poses[:-1] + axes_z * lift[:, None] - poses[-1]
+        x, y, z = (centres @ rot).T  # in the housing's frame
         d, w, h, t = a.size[0] / 2, a.size[1] / 2, a.size[2], a.wall
-        inside = []
-        for label, obj in self.objects.items():
-            body_rot = self.d.xmat[obj.body].reshape(3, 3)
-            centre = self.d.xpos[obj.body] + body_rot[:, 2] * (obj.half[2] - obj.bottom)
-            x, y, z = rot.T @ (centre - origin)
-            if -d + t <= x <= d and abs(y) <= w - t and t <= z <= h - t:
-                inside.append(label)
-        return sorted(inside)
+        inside = (-d + t <= x) & (x <= d) & (np.abs(y) <= w - t) & (t <= z) & (z <= h - t)
+        found = sorted(labels[i] for i in np.flatnonzero(inside))
+        self._seen = (poses, xmat, found)
+        return list(found)
 
     def state(self) -> ApplianceState:
         t = float(self.d.time)

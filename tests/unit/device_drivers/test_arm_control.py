@@ -10,9 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import anyio
+import mujoco
 import numpy as np
 import pytest
 
+from device_drivers import arm_control
+from device_drivers.arm_control import ArmController
+from device_drivers.control import Job
 from device_drivers.drivers import SimArm, SimBase, sim_devices
 from device_drivers.errors import (
     CommandError,
@@ -22,7 +26,10 @@ from device_drivers.errors import (
 )
 from device_drivers.interfaces import Arm
 from device_drivers.motion_math import tool_down
+from device_drivers.plant import Plant
+from device_drivers.protocol import MoveTcp
 from device_drivers.scenario_load import load_scenario
+from device_drivers.sim_state import set_joint_positions
 from device_drivers.world import SimWorld, WorldOptions, running_world
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
@@ -166,3 +173,54 @@ async def test_cancelling_a_motion_halts_the_arm(world: SimWorld) -> None:
     await world.sleep(0.5)
     assert (await arm.state()).joints == pytest.approx(held, abs=2e-3)
     await arm.move_joints(READY)  # and it takes new commands
+
+
+def _line_setpoints(monkeypatch: pytest.MonkeyPatch, ahead: int, nudge: bool) -> list[Any]:
+    """The set-points of every tick of three straight moves in a bare plant (arm only,
+    whole-body, one out of reach that fails on its way), with the tracker's points worked out
+    ``ahead`` ticks at a time; ``nudge`` shifts the clock once (a tick at an unexpected time)."""
+    monkeypatch.setattr(arm_control, "_AHEAD", ahead)
+    plant = Plant(load_scenario(KITTING))
+    arm = plant.controllers[("r1", "arm")]
+    assert isinstance(arm, ArmController)
+    m, d = plant.model, plant.data
+    set_joint_positions(m, d, {f"r1/{j}": v for j, v in READY.items()})
+    mujoco.mj_forward(m, d)
+    seen: list[Any] = []
+    start = arm.state().tcp
+    for goal, whole in (
+        (tool_down(start.x + 0.08, start.y - 0.1, start.z - 0.06), False),
+        (tool_down(start.x + 0.25, start.y, start.z - 0.1, yaw=0.3), True),
+        (tool_down(start.x + 0.9, start.y, start.z), False),
+    ):
+        job = Job(arm.key, MoveTcp(goal, speed=0.3, whole_body=whole))
+        arm.start(job, float(d.time))
+        for tick in range(600):
+            if nudge and tick == 37:
+                d.time += 1e-4
+            arm.tick(float(d.time))
+            seen.append(d.ctrl.copy())
+            if job.finished:
+                break
+            mujoco.mj_step(m, d, nstep=plant.steps_per_tick)
+        assert job.finished
+        seen.append(type(job.error).__name__)
+    outcomes = [x for x in seen if isinstance(x, str)]
+    assert outcomes == ["NoneType", "NoneType", "UnreachableError"]
+    return seen
+
+
+@pytest.mark.parametrize("nudge", [False, True])
+def test_straight_moves_worked_out_ahead_are_the_same(
+    monkeypatch: pytest.MonkeyPatch, nudge: bool
+) -> None:
+    """The tracker's points of the next ticks are computed together: the set-points are the
+    very numbers computed one tick at a time, also when a tick comes at another time."""
+    one_by_one = _line_setpoints(monkeypatch, 1, nudge)
+    ahead = _line_setpoints(monkeypatch, 25, nudge)
+    assert len(one_by_one) == len(ahead) > 100
+    for a, b in zip(one_by_one, ahead, strict=True):
+        if isinstance(a, str):
+            assert a == b
+        else:
+            np.testing.assert_array_equal(a, b)

@@ -6,11 +6,14 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
+import numpy.typing as npt
 import pytest
+import rerun as rr
 import rerun.chunk
 
 from device_drivers.drivers import SimArm, sim_devices
-from device_drivers.recorder import Recorder
+from device_drivers.recorder import Recorder, _TransformColumns
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import WorldOptions, running_world
 
@@ -57,3 +60,68 @@ async def test_a_run_is_recorded_to_a_file(tmp_path: Path) -> None:
     assert 45 <= rows["/robots/r1/joints"] <= 60  # joint series: every sample
     assert rows["/events/r1"] >= 1  # "r1-arm: MoveJoints done"
     assert recorder.samples == rows["/robots/r1/joints"]
+
+
+async def _record(path: Path, min_flush_wall: float) -> Recorder:
+    """r1's arm moves for 1 s, everything else stands still; 3 s simulated in all."""
+    recorder = Recorder(
+        path=path, rate=25.0, flush_every=0.5, min_flush_wall=min_flush_wall, recording_id="test"
+    )
+    async with running_world(load_scenario(KITTING), WorldOptions(fast=True), recorder) as world:
+        arm = sim_devices(world, "r1")[("r1", "arm")]
+        assert isinstance(arm, SimArm)
+        await arm.move_joints({"elbow": 1.0}, duration=1.0)
+        await world.wait_time(3.0)
+    recorder.close()
+    return recorder
+
+
+def times_of(path: Path, entity: str) -> tuple[int, npt.NDArray[np.float64]]:
+    """(chunks, sorted simulated times in s) of an entity's rows."""
+    chunks, times = 0, []
+    for chunk in rerun.chunk.RrdReader(path).stream():
+        if str(chunk.entity_path) == entity and not chunk.is_static:
+            chunks += 1
+            column = chunk.to_record_batch().column("sim_time").to_numpy()
+            times.append(column / np.timedelta64(1, "s"))
+    return chunks, np.sort(np.concatenate(times)) if times else np.zeros(0)
+
+
+async def test_samples_at_its_rate_and_batches_sends_in_a_fast_world(tmp_path: Path) -> None:
+    """The plant calls the recorder when a sample is due (every 0.04 s: 25 Hz, to the 10 ms
+    tick); a world running faster than real time gets fewer, bigger sends, same content."""
+    each, few = tmp_path / "each.rrd", tmp_path / "few.rrd"
+    every_flush = await _record(each, min_flush_wall=0.0)
+    batched = await _record(few, min_flush_wall=60.0)
+    for path, recorder in ((each, every_flush), (few, batched)):
+        _, times = times_of(path, "/robots/r1/joints")
+        assert len(times) == recorder.samples >= 75  # 3 s at 25 Hz, and the sample at 0
+        steps = np.diff(times)
+        assert np.all(steps > 0.04 - 1e-6) and np.all(steps < 0.05 + 1e-6)
+        _, text = times_of(path, "/events/r1")
+        assert len(text) == 1 and 1.0 <= text[0] <= 1.1  # "MoveJoints done", when it was
+        assert times_of(path, "/world/r2.forearm")[1].tolist() == [0.0]  # still: sent once
+    assert times_of(each, "/robots/r1/joints")[0] >= 6  # every 0.5 s simulated
+    assert times_of(few, "/robots/r1/joints")[0] == 2  # the first flush, and the one at close
+    arm_each, arm_few = (
+        times_of(each, "/world/r1.forearm")[1],
+        times_of(few, "/world/r1.forearm")[1],
+    )
+    assert set(arm_each.round(3)) <= set(arm_few.round(3))  # the batch holds all its samples
+    assert len(arm_few) == batched.samples
+
+
+def test_transform_columns_are_rerun_s_own() -> None:
+    """The recorder builds pose columns from numpy itself: exactly what
+    ``rr.Transform3D.columns`` makes, descriptors and arrow arrays alike."""
+    rng = np.random.default_rng(0)
+    pos, quat = rng.normal(size=(7, 3)), rng.normal(size=(7, 4))
+    ours = {str(c.component_descriptor()): c for c in _TransformColumns(7)(pos, quat)}
+    theirs = {
+        str(c.component_descriptor()): c
+        for c in rr.Transform3D.columns(translation=pos, quaternion=quat)
+    }
+    assert ours.keys() == theirs.keys() == {"Transform3D:translation", "Transform3D:quaternion"}
+    for key, column in theirs.items():
+        assert ours[key].component_descriptor() == column.component_descriptor()
+        assert ours[key].as_arrow_array().equals(column.as_arrow_array())

@@ -64,3 +64,18 @@ def test_nan_control_names_the_actuator(world: tuple[Any, Any]) -> None:
     data.ctrl[model.actuator("r1/gripper").id] = float("nan")
     with pytest.raises(SimulationDivergedError, match=r"ctrl.*'r1/gripper'"):
         check_state(model, data)
+
+
+def test_finite_values_whose_sums_overflow_pass(world: tuple[Any, Any]) -> None:
+    """The quick test after each batch sums the state; an overflowing sum of finite values
+    sends it to the exact scans, which find nothing wrong."""
+    model, data = world
+    data.ctrl[:2] = 1e308  # finite, but the sum is inf
+    check_state(model, data)
+
+
+def test_negative_infinity_in_qvel_is_found(world: tuple[Any, Any]) -> None:
+    model, data = world
+    data.qvel[model.joint("r1/shoulder_pan").dofadr[0]] = -float("inf")
+    with pytest.raises(SimulationDivergedError, match=r"qvel.*'r1/shoulder_pan'"):
+        check_state(model, data)

@@ -4,6 +4,7 @@ and fails every command, the event loop never blocks while the world runs."""
 from __future__ import annotations
 
 import time
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,9 @@ from device_drivers.errors import (
     SimulationDivergedError,
     UnknownElementError,
 )
+from device_drivers.plant import Plant
 from device_drivers.protocol import MoveJoints
+from device_drivers.robot_spec import Pose2D
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import SimWorld, WorldOptions, running_world
 
@@ -137,3 +140,112 @@ async def test_ground_truth_queries() -> None:
         contacts = await world.contacts()
         tg.cancel_scope.cancel()
     assert isinstance(contacts, list)
+
+
+async def _scripted(options: WorldOptions) -> tuple[list[tuple[str, float]], list[Any], Any]:
+    """Two robots and a sensor driven by local drivers, each command issued as soon as the
+    one before it is over: (command start times), (detections), final joint positions."""
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    starts: list[tuple[str, float]] = []
+    seen: list[Any] = []
+    async with running_world(scenario, options) as world:
+        devices = sim_devices(world)
+        arm1, hand1 = devices[("r1", "arm")], devices[("r1", "gripper")]
+        base2, camera = devices[("r2", "base")], devices[("Camera-1", "sensor")]
+        assert isinstance(arm1, SimArm)
+
+        def started(key: tuple[str, str]) -> None:
+            """Note when the command that just ended started; then keep the loop busy for a
+            while (the world runs on meanwhile), as a loaded loop would before reacting."""
+            starts.append((f"{key[0]}/{key[1]}", world.plant.controllers[key].started_at))
+            time.sleep(0.004)
+
+        async def r1() -> None:
+            await arm1.move_joints({"shoulder_lift": 0.4, "elbow": 1.2}, duration=0.55)
+            started(("r1", "arm"))
+            await hand1.close()  # type: ignore[attr-defined]
+            started(("r1", "gripper"))
+            seen.append(await camera.detect())  # type: ignore[attr-defined]
+            await arm1.move_joints({"elbow": 1.5}, duration=0.33)
+            started(("r1", "arm"))
+            await hand1.open()  # type: ignore[attr-defined]
+            started(("r1", "gripper"))
+
+        async def r2() -> None:
+            await base2.go_to(Pose2D(-0.4, 1.0, 0.2))  # type: ignore[attr-defined]
+            started(("r2", "base"))
+            seen.append(await camera.detect())  # type: ignore[attr-defined]
+            await world.wait_time(2.345)  # an alarm, in the middle of a batch
+            started(("r2", "base"))  # a slow reaction to it (notes the go_to's start again)
+            await base2.go_to(Pose2D(-0.6, 1.0, 0.0))  # type: ignore[attr-defined]
+            started(("r2", "base"))
+
+        async with anyio.create_task_group() as tg:
+            tg.start_soon(r1)
+            tg.start_soon(r2)
+        handovers = world.statistics().handovers
+        assert world.snapshot.time < 8.0
+        await world.wait_time(8.0)
+        final = await world.call(lambda _model, data: (float(data.time), data.qpos.copy()))
+    return sorted(starts), [seen, handovers], final
+
+
+async def test_fast_runs_keep_the_batch_semantics() -> None:
+    """Handing finished jobs over during a run of batches changes nothing in simulated time:
+    the same commands start at the same ticks as with a hand-over after every batch, and the
+    world ends in the same state; it only saves hand-overs."""
+    runs, lockstep = (
+        await _scripted(FAST),
+        await _scripted(WorldOptions(fast=True, fast_handover=0)),
+    )
+    assert runs[0] == lockstep[0] and len(runs[0]) == 7
+    assert runs[1][0] == lockstep[1][0]  # the same detections, noise included
+    assert runs[2][0] == lockstep[2][0]  # the same tick: 8 s, a batch boundary
+    np.testing.assert_array_equal(runs[2][1], lockstep[2][1])
+    assert runs[1][1] < lockstep[1][1] / 2  # far fewer hand-overs
+
+
+async def test_a_call_runs_at_the_next_batch_boundary() -> None:
+    """A fast run returns at the next batch boundary when call() waits, not after its wall
+    budget (worth up to a second of simulated time here)."""
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    async with running_world(scenario, FAST) as world:
+        arm = sim_devices(world, "r1")[("r1", "arm")]
+        assert isinstance(arm, SimArm)
+        for _ in range(3):
+            await arm.move_joints({"elbow": 1.2}, duration=0.43)  # handed over mid-run
+            finished = world.snapshot.time
+            now = await world.call(lambda _model, data: float(data.time))
+            assert 0.0 < now - finished <= FAST.fast_batch + 1e-9
+            await arm.move_joints({"elbow": 1.5}, duration=0.43)
+
+
+async def test_progress_is_reported_every_batch_in_fast_mode() -> None:
+    scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
+    async with running_world(scenario, FAST) as world:
+        arm = sim_devices(world, "friend")[("friend", "arm")]
+        assert isinstance(arm, SimArm)
+        seen: list[tuple[float, float]] = []
+        await arm.move_joints(
+            {"elbow": 1.2}, duration=1.0, progress=lambda p: seen.append((p, world.snapshot.time))
+        )
+    times = [t for _, t in seen[:-1]]
+    assert 9 <= len(times) <= 12  # 1 s of motion, batches of 0.1 s
+    assert np.allclose(np.diff(times), FAST.fast_batch)
+    assert [p for p, _ in seen] == sorted(p for p, _ in seen) and seen[-1][0] == 1.0
+
+
+@pytest.mark.parametrize("fast_run", [False, True])
+def test_a_diverged_state_fails_the_batch_it_happens_in(fast_run: bool) -> None:
+    """The state is checked after every batch, also inside a fast run of batches."""
+    plant = Plant(load_scenario(SCENARIOS / "kitting" / "scenario.toml"))
+    ticks = round(FAST.fast_batch / plant.tick_time)
+    plant.run_batch(ticks, [])
+    plant.data.qvel[plant.model.joint("r1/elbow").dofadr[0]] = np.nan
+    options: dict[str, Any] = {}
+    if fast_run:  # batches for up to 10 s of wall time, had nothing been found
+        options = {"inbox": deque(), "until": lambda _t: False, "budget": 10.0}
+        options["report"] = lambda _jobs, _snapshot: None
+    with pytest.raises(SimulationDivergedError, match="r1/elbow"):
+        plant.run_batch(ticks, [], **options)
+    assert plant.batches_run == 2  # the first batch after the bad state raised
