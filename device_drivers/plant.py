@@ -169,7 +169,7 @@ class Plant:
                 if until is not None and until(float(self.data.time)):
                     break
                 queued = [inbox.popleft() for _ in range(len(inbox))]
-                finished = self._run_ticks(ticks, queued, report, wake)
+                finished = self._run_ticks(ticks, queued, report, wake, within=True)
                 total += ticks
         if report is None:  # (else the last batch took it)
             self.snapshot = self._snapshot()
@@ -181,11 +181,14 @@ class Plant:
         jobs: list[Job],
         report: Callable[[list[Job], Snapshot], None] | None,
         wake: Callable[[float], bool] | None = None,
+        *,
+        within: bool = False,
     ) -> list[Job]:
         """One batch without the final snapshot: start ``jobs``, tick, step, sample, check;
         return the jobs that finished (none with ``report``: see :meth:`run_batch`). Per tick
         only the active controllers run (no command starts within a batch, so none becomes
-        active), and the recorder only when a sample is due."""
+        active), and the recorder only when a sample is due. ``within``: a batch after the
+        first of a fast run, which starts where the one before ended, with its snapshot."""
         m, d = self.model, self.data
         self.batches_run = getattr(self, "batches_run", 0) + 1  # read by SimWorld.statistics
         self.ticks_run = getattr(self, "ticks_run", 0) + ticks
@@ -199,7 +202,12 @@ class Plant:
             self.controllers[job.device].start(job, t)
         controllers = list(self.controllers.values())
         if report is not None and jobs:
-            self._report(report, cancelled + self._collect(controllers))
+            done = cancelled + self._collect(controllers)
+            if within and all(self.kinds[job.device] == "sensor" for job in jobs):
+                if done:  # only readings, answered at once: the world is as the snapshot of
+                    report(done, self.snapshot)  # the batch before shows it (the same time)
+            else:
+                self._report(report, done)
             cancelled = []
         active = [ctrl for ctrl in controllers if ctrl.active]
         recorder, nstep = self.recorder, self.steps_per_tick

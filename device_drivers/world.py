@@ -23,21 +23,20 @@ Threading model (every crossing is here or in the modules it names):
 Pacing: real time (default) runs each batch when the wall clock says its ticks are due
 (``anyio.sleep`` in between); if the simulation falls behind by more than ``slip`` seconds it
 gives up catching up and counts a slip. ``fast`` runs batches back to back in one thread call
-(a *run*) and returns to the loop only when it must: after a batch that advanced a job that
-reports progress, when :meth:`SimWorld.call` waits, and at least every ``fast_handover`` wall
-seconds (fresh snapshots for readers). A job that finishes meanwhile, and a
-:meth:`SimWorld.wait_time` alarm that comes due, is handed to the loop at once
-(``call_soon_threadsafe``, with a snapshot of that tick) while the batch goes on; before the
-next batch starts, the simulation thread waits until the loop has woken the waiters and let
-them take their first step, so a command they queue in reaction starts at the next batch
-boundary, exactly as if the run had returned there. Commands queued otherwise start at the
-next batch boundary too. Every batch ends with a snapshot posted to the loop, and a batch
-starts only once the loop has taken the snapshot posted a batch earlier: as before, the
-simulation never runs away from the loop, and readers see a snapshot at most a batch or two
-old. Each thread hand-over costs ~0.3-1 ms of wall time on a busy 2-core
-machine, as much as the physics of a batch in a small scene: that is what this saves.
-Failure: a diverged state (or any error inside a batch) stops the world; every waiting and
-later command fails with that error.
+(a *run*) that returns only when a job that reports progress advanced, when
+:meth:`SimWorld.call` waits, when the world is stopped, and after ``fast_handover`` wall
+seconds at most. Meanwhile the simulation thread posts to the loop
+(``call_soon_threadsafe``, with a snapshot of that moment) every job as it finishes, every
+:meth:`SimWorld.wait_time` alarm as it comes due, and the end of every batch; before the
+next batch starts it waits until the loop has taken those and run what was ready once (as
+the checkpoint between two batches did). So the simulation still advances in step with the
+loop, a batch at a time: a command sent in reaction to anything starts at the next batch
+boundary, exactly as if the run had returned there, and readers see a snapshot at most a
+batch old. What it saves is the thread hand-over per batch through ``anyio.to_thread`` (the
+worker's and the loop's wake-ups, 0.3-1 ms of wall time on a busy 2-core machine, as much as
+the physics of a batch of a small scene), and the loop's reactions to a finished job now
+overlap the rest of its batch. Failure: a diverged state (or any error inside a batch) stops
+the world; every waiting and later command fails with that error.
 """
 
 from __future__ import annotations
@@ -150,7 +149,6 @@ class SimWorld:
         self._reporting = 0  # waiting jobs with a progress callback: read by it too
         self._calls = 0  # call()s waiting for the model: read by it too
         self._acks: list[threading.Event] = []  # simulation thread only (see _report)
-        self._window: tuple[list[threading.Event], list[threading.Event]] = ([], [])  # too
         self._woken: set[anyio.Event] = set()  # alarms reported during this run: that thread's
         self._loop: asyncio.AbstractEventLoop | None = None
         self._ik: dict[str, tuple[PlacoIK, DlsIK]] = {}
@@ -217,7 +215,6 @@ class SimWorld:
                 jobs = [self._inbox.popleft() for _ in range(len(self._inbox))]
                 started = time.perf_counter()
                 self._acks.clear()  # the reactions to those came in during the checkpoint
-                self._window = ([], [])
                 self._woken.clear()  # _complete rang them
                 try:
                     batch = await anyio.to_thread.run_sync(run, ticks, jobs, limiter=self._limiter)
@@ -236,12 +233,10 @@ class SimWorld:
         dealt with what was reported during the last batch, then say whether the run must
         return (a job reports progress, a :meth:`call` waits, the world is being stopped;
         an alarm is due, unless reported: see :meth:`_wake`)."""
-        older, last = self._window
-        for ack in [*self._acks, *older]:
+        for ack in self._acks:
             if not ack.wait(_ACK_WAIT):
-                _log.warning("the event loop took over %g s to take finished jobs", _ACK_WAIT)
+                _log.warning("the event loop took over %g s to take a batch", _ACK_WAIT)
         self._acks.clear()
-        self._window = (last, [])
         try:
             anyio.from_thread.check_cancelled()  # the world is being stopped: return now
         except BaseException as exc:  # the backend's cancellation exception
@@ -261,16 +256,12 @@ class SimWorld:
         return bool(due)
 
     def _report(self, finished: list[Job], snapshot: Snapshot) -> None:
-        """Simulation thread: hand ``finished`` jobs, a due alarm or just the snapshot at the
-        end of a batch to the loop now (see module doc). The loop must have taken jobs and
-        alarms before the next batch starts, and a mere snapshot before the one after: the
-        simulation never runs more than a batch ahead of what the loop has seen."""
+        """Simulation thread: hand ``finished`` jobs, a due alarm or the end of a batch to the
+        loop now, with ``snapshot`` (see module doc); the next batch starts once the loop has
+        taken it and let the tasks it woke take a step."""
         assert self._loop is not None
         ack = threading.Event()
-        if finished or snapshot.time >= self._next_alarm:
-            self._acks.append(ack)
-        else:
-            self._window[1].append(ack)
+        self._acks.append(ack)
         self._loop.call_soon_threadsafe(self._deliver, finished, snapshot, ack)
 
     def _deliver(self, finished: list[Job], snapshot: Snapshot, ack: threading.Event) -> None:
