@@ -38,7 +38,9 @@ class Grasping:
         mode: GraspMode,
     ) -> None:
         self.m, self.d, self.mode = model, data, mode
-        self.pads = [np.array([model.geom(g).id for g in side]) for side in layout.pad_geoms]
+        self.side = np.zeros(model.ngeom, dtype=np.int8)  # geom id -> 1 left pad, 2 right pad
+        for side, geoms in enumerate(layout.pad_geoms, start=1):
+            self.side[[model.geom(g).id for g in geoms]] = side
         self.hand = model.body(layout.hand_body).id
         self.labels = {body: label for label, body in graspables.items()}
         self.bodies = dict(graspables)
@@ -51,10 +53,10 @@ class Grasping:
         if n == 0:
             return set(), set()
         g1, g2 = self.d.contact.geom1[:n], self.d.contact.geom2[:n]
-        body = self.m.geom_bodyid
+        body, s1, s2 = self.m.geom_bodyid, self.side[g1], self.side[g2]
         sides: list[set[int]] = []
-        for pad in self.pads:
-            other = np.concatenate([g2[np.isin(g1, pad)], g1[np.isin(g2, pad)]])
+        for pad in (1, 2):
+            other = np.concatenate([g2[s1 == pad], g1[s2 == pad]])
             sides.append({int(b) for b in body[other]})
         return sides[0], sides[1]
 
