@@ -29,7 +29,7 @@ from device_drivers.control import Controller, DeviceKey, Job
 from device_drivers.errors import DeviceUnavailableError
 from device_drivers.grasp import Grasping, GraspMode
 from device_drivers.gripper_control import GripperController
-from device_drivers.gripper_drive import gripper_drive
+from device_drivers.gripper_drive import GripperDrive, gripper_drive
 from device_drivers.physics_options import TIMESTEP
 from device_drivers.placement import footprints, resolve_placements
 from device_drivers.robot_spec import robot_layout
@@ -41,7 +41,7 @@ from device_drivers.sim_health import DEFAULT_MAX_ACCELERATION, check_state
 from device_drivers.sim_state import hold_servos, set_joint_positions
 
 if TYPE_CHECKING:
-    from device_drivers.recorder import Recorder
+    from device_drivers.recorder import Recorder, RobotSeries
 
 __all__ = ["Batch", "DeviceKind", "Plant"]
 
@@ -73,7 +73,8 @@ class Plant:
         self.model: Any = self.spec.compile()
         self.data: Any = mujoco.MjData(self.model)
         m, d = self.model, self.data
-        drives = {}
+        self.drives: dict[str, GripperDrive] = {}
+        drives = self.drives
         for robot in scenario.robots:  # grippers start open; a file's arm at its home posture
             layout = robot_layout(robot.spec)
             drives[robot.name] = drive = gripper_drive(m, layout, robot.spec)
@@ -133,6 +134,16 @@ class Plant:
     @property
     def time(self) -> float:
         return float(self.data.time)
+
+    def series(self) -> list[RobotSeries]:
+        """What a recorder plots per robot: base and arm joints, gripper opening."""
+        from device_drivers.recorder import RobotSeries  # rerun: only when recording
+
+        return [
+            RobotSeries(r.name, (*lay.base_joints, *lay.arm_joints), self.drives[r.name].opening)
+            for r in self.scenario.robots
+            for lay in [robot_layout(r.spec)]
+        ]
 
     def run_batch(
         self,

