@@ -27,9 +27,19 @@ import numpy.typing as npt
 from device_drivers.menagerie import load_mjcf, menagerie_paths
 from device_drivers.robot_spec import MjcfArm, RobotLayout, RobotSpec
 
-__all__ = ["GripperDrive", "PadDrive", "TendonDrive", "calibrate", "gripper_drive", "pad_gap"]
+__all__ = [
+    "Calibration",
+    "GripperDrive",
+    "PadDrive",
+    "TendonDrive",
+    "calibrate",
+    "gripper_drive",
+    "pad_gap",
+]
 
 FloatArray = npt.NDArray[np.float64]
+Calibration = tuple[FloatArray, FloatArray, float]
+"""Controls, the pad gaps (m) they settle at, and |d gap / d finger angle| (m/rad)."""
 _CALIBRATION_POINTS = 6
 _SETTLE_STEPS = 400
 
@@ -98,7 +108,7 @@ class PadDrive(GripperDrive):
         model: Any,
         layout: RobotLayout,
         spec: RobotSpec,
-        calibration: tuple[FloatArray, FloatArray, float],
+        calibration: Calibration,
     ) -> None:
         super().__init__(model, layout, spec)
         self.left = np.array([model.geom(g).id for g in layout.pad_geoms[0]])
@@ -127,11 +137,20 @@ class PadDrive(GripperDrive):
         self.m.actuator_forcerange[self.act] = [-share * self.full_force, share * self.full_force]
 
 
-def gripper_drive(model: Any, layout: RobotLayout, spec: RobotSpec) -> GripperDrive:
-    """The drive of robot ``spec``'s gripper in ``model`` (calibrated now for an MJCF one)."""
+def gripper_drive(
+    model: Any,
+    layout: RobotLayout,
+    spec: RobotSpec,
+    calibrations: dict[MjcfArm, Calibration] | None = None,
+) -> GripperDrive:
+    """The drive of robot ``spec``'s gripper in ``model`` (calibrated now for an MJCF one;
+    ``calibrations``: ones made before, for robots with the same files, reused and added to)."""
     if spec.mjcf is None:
         return TendonDrive(model, layout, spec)
-    return PadDrive(model, layout, spec, calibrate(spec.mjcf))
+    known = {} if calibrations is None else calibrations
+    if spec.mjcf not in known:
+        known[spec.mjcf] = calibrate(spec.mjcf)
+    return PadDrive(model, layout, spec, known[spec.mjcf])
 
 
 def pad_gap(
@@ -150,7 +169,7 @@ def pad_gap(
     return abs(c1 - c2) - h1 - h2
 
 
-def calibrate(arm: MjcfArm) -> tuple[FloatArray, FloatArray, float]:
+def calibrate(arm: MjcfArm) -> Calibration:
     """Controls, the gaps (m) they settle at, and the mean |d gap / d finger angle| (m/rad) of
     ``arm``'s gripper file alone, without gravity (see the module doc)."""
     _arm_path, path = menagerie_paths(arm)

@@ -29,10 +29,10 @@ from device_drivers.control import Controller, DeviceKey, Job
 from device_drivers.errors import DeviceUnavailableError
 from device_drivers.grasp import Grasping, GraspMode
 from device_drivers.gripper_control import GripperController
-from device_drivers.gripper_drive import GripperDrive, gripper_drive
+from device_drivers.gripper_drive import Calibration, GripperDrive, gripper_drive
 from device_drivers.physics_options import TIMESTEP
 from device_drivers.placement import footprints, resolve_placements
-from device_drivers.robot_spec import robot_layout
+from device_drivers.robot_spec import MjcfArm, robot_layout
 from device_drivers.scenario import Scenario
 from device_drivers.scene_facts import SceneFacts, Snapshot
 from device_drivers.scene_model import build_scene, weld_name
@@ -75,9 +75,10 @@ class Plant:
         m, d = self.model, self.data
         self.drives: dict[str, GripperDrive] = {}
         drives = self.drives
+        calibrations: dict[MjcfArm, Calibration] = {}  # robots with the same gripper file
         for robot in scenario.robots:  # grippers start open; a file's arm at its home posture
             layout = robot_layout(robot.spec)
-            drives[robot.name] = drive = gripper_drive(m, layout, robot.spec)
+            drives[robot.name] = drive = gripper_drive(m, layout, robot.spec, calibrations)
             drive.start_open(d)
             if robot.spec.mjcf is not None:
                 home = dict(zip(layout.arm_joints, robot.spec.mjcf.home, strict=True))

@@ -233,6 +233,28 @@ def test_calibrated_drive_maps_openings_to_controls(model: Any, layout: RobotLay
     assert model.actuator_forcerange[drive.act].tolist() == pytest.approx([-2.5, 2.5])
 
 
+def test_robots_with_the_same_gripper_file_share_one_calibration(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two UR5e robots in one world: the 2F-85 is calibrated once, both drives use it."""
+    import device_drivers.gripper_drive as module
+
+    made: list[MjcfArm] = []
+
+    def counting(arm: MjcfArm) -> module.Calibration:
+        made.append(arm)
+        return calibrate(arm)
+
+    monkeypatch.setattr(module, "calibrate", counting)
+    r2 = RobotSpec(name="r2", mjcf=MjcfArm())
+    model = build_world([(SPEC, Pose2D()), (r2, Pose2D(x=1.5))]).compile()
+    known: dict[MjcfArm, module.Calibration] = {}
+    one, two = (gripper_drive(model, robot_layout(s), s, known) for s in (SPEC, r2))
+    assert made == [MjcfArm()] and list(known) == [MjcfArm()]
+    assert isinstance(one, PadDrive) and isinstance(two, PadDrive)
+    assert one.act != two.act and one.gaps.tolist() == two.gaps.tolist()
+
+
 def test_gripper_closes_over_its_control_range(model: Any, layout: RobotLayout) -> None:
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
