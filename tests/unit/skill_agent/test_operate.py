@@ -20,7 +20,7 @@ from skill_agent.plugins import SkillRegistry
 from skill_agent.protocol import Progress, RunEvent, StartRun
 from skill_agent.simulated import SimulatedOutcomes
 from skill_agent.skills import HEATED, Heat, Operate, OperateStop
-from tests.unit.skill_agent.test_skills_descriptions import _plan
+from tests.unit.skill_agent.scenario_planning import plan_scenario
 from tests.unit.skill_agent.test_skills_fakes import FakeAppliance, Rig, ToyWorld, rig, run
 from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
 from wm_store.protocol import SetRelation, UnsetRelation
@@ -248,14 +248,16 @@ async def wm() -> AsyncIterator[WmClient]:
 
 
 async def test_the_planner_starts_the_heater_with_operate(wm: WmClient) -> None:
-    plan = await _plan(wm, "meal", ["meal/friend", "meal/microwave"], "heating(Microwave-1)")
+    plan = await plan_scenario(
+        wm, "meal", ["meal/friend", "meal/microwave"], "heating(Microwave-1)"
+    )
     assert [s.skill for s in plan.steps] == ["operate"]
 
 
 async def test_the_meal_is_warmed_with_heat_not_operate(wm: WmClient) -> None:
     scenario = load_scenario(ROOT / "configs" / "scenarios" / "meal" / "scenario.toml")
     goal = " and ".join(g for g in scenario.goals if HEATED or "heated" not in g)
-    plan = await _plan(wm, "meal", ["meal/friend", "meal/microwave"], goal)
+    plan = await plan_scenario(wm, "meal", ["meal/friend", "meal/microwave"], goal)
     skills = [s.skill for s in plan.steps]
     assert "operate" not in skills and "operate_stop" not in skills
     if HEATED:

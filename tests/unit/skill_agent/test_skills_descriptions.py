@@ -14,17 +14,13 @@ import pytest
 
 from device_drivers.scenario_load import load_scenario
 from skill_agent.conditions import describe, symbolic
-from skill_agent.config import AgentConfig, load_config
+from skill_agent.config import load_config
 from skill_agent.params import check_description, is_value_kind
 from skill_agent.plugins import SkillRegistry
 from skill_agent.protocol import SkillDescription
-from skill_agent.scenario_wm import scenario_ops
 from skill_agent.skills import ALL_SKILLS, HEATED, RUNTIME_ONLY
-from task_agent.discovery_model import agents_from_view
-from task_agent.goals import parse_goal
-from task_agent.planner import Plan, Planner
+from tests.unit.skill_agent.scenario_planning import plan_scenario
 from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
-from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIGS = ROOT / "configs" / "agents"
@@ -92,44 +88,12 @@ async def wm(ontology: Ontology) -> AsyncIterator[WmClient]:
         tg.cancel_scope.cancel()
 
 
-async def _register(wm: WmClient, config: AgentConfig) -> None:
-    entries = SkillRegistry.from_config(config, wm.ontology).load()
-    encoder = msgspec.json.Encoder()
-    skills = [
-        SkillSpec(
-            name=e.description.name,
-            skill_type=e.description.family,
-            description=encoder.encode(e.description).decode(),
-        )
-        for e in entries.values()
-    ]
-    await wm.register_robot(
-        RobotRegistration(
-            agent=config.name,
-            agent_type=config.agent_type,
-            robot_type=config.robot.type,
-            robot_label=config.robot_label,
-            devices=[DeviceSpec(type=d.type, label=d.label) for d in config.devices],
-            skills=skills,
-        )
-    )
-
-
-async def _plan(wm: WmClient, scenario: str, agents: list[str], goal: str) -> Plan:
-    await wm.transact(
-        scenario_ops(load_scenario(ROOT / "configs" / "scenarios" / scenario / "scenario.toml"))
-    )
-    for name in agents:
-        await _register(wm, load_config(CONFIGS / f"{name}.toml"))
-    found = agents_from_view(wm)
-    assert all(not a.problems for a in found), [a.problems for a in found]
-    return await Planner(timeout=60).plan(found, wm, parse_goal(goal, wm))
-
-
 @pytest.mark.anyio
 async def test_the_kitting_goals_are_plannable(wm: WmClient) -> None:
     scenario = load_scenario(ROOT / "configs" / "scenarios" / "kitting" / "scenario.toml")
-    plan = await _plan(wm, "kitting", ["kitting/r1", "kitting/r2"], " and ".join(scenario.goals))
+    plan = await plan_scenario(
+        wm, "kitting", ["kitting/r1", "kitting/r2"], " and ".join(scenario.goals)
+    )
     skills = [s.skill for s in plan.steps]
     assert skills.count("pick") == skills.count("place") == len(scenario.goals)
     assert {s.agent for s in plan.steps} == {"r1", "r2"}
@@ -139,7 +103,7 @@ async def test_the_kitting_goals_are_plannable(wm: WmClient) -> None:
 @pytest.mark.anyio
 async def test_the_meal_goal_is_plannable_through_the_microwave(wm: WmClient) -> None:
     goal = "contain(Microwave-1, MealBox-1) and doorOpen(Microwave-1) = false"
-    plan = await _plan(wm, "meal", ["meal/friend", "meal/microwave"], goal)
+    plan = await plan_scenario(wm, "meal", ["meal/friend", "meal/microwave"], goal)
     skills = [s.skill for s in plan.steps]
     assert skills.index("pick") < skills.index("put_in") < skills.index("close_door")
     assert "open_door" in skills
@@ -149,7 +113,7 @@ async def test_the_meal_goal_is_plannable_through_the_microwave(wm: WmClient) ->
 async def test_serving_the_meal_is_plannable(wm: WmClient) -> None:
     scenario = load_scenario(ROOT / "configs" / "scenarios" / "meal" / "scenario.toml")
     goal = " and ".join(g for g in scenario.goals if HEATED or "heated" not in g)
-    plan = await _plan(wm, "meal", ["meal/friend", "meal/microwave"], goal)
+    plan = await plan_scenario(wm, "meal", ["meal/friend", "meal/microwave"], goal)
     skills = [s.skill for s in plan.steps]
     assert skills[-1] == "serve"
     if HEATED:  # the ontology knows `heated`: the meal goes through the microwave
