@@ -9,9 +9,9 @@ callback threads would hang interpreter exit).
 from __future__ import annotations
 
 import asyncio
-import logging
+import time
 import uuid
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import Iterator
 from typing import Protocol
 
 # hypothesis is imported up front: pytest rewrites the asserts of modules it imports,
@@ -72,34 +72,41 @@ def mesh_config() -> MeshConfigFactory:
     return make
 
 
-class SlowSteps(logging.Handler):
-    """Collects asyncio's debug-mode reports of loop steps that ran too long."""
+class SlowSteps:
+    """Loop steps (task steps and callbacks) that held the event loop's thread, in ``reports``.
 
-    def __init__(self) -> None:
-        super().__init__(logging.WARNING)
+    A step is reported when its thread spent at least ``cpu`` seconds of CPU in it (a
+    computation or busy wait on the loop), or when it lasted ``stall`` seconds of wall time
+    whatever it did (a blocking sleep or wait). A step that only waited to be scheduled
+    (another process had the core, another thread had the GIL) uses no CPU of its own, so a
+    busy machine does not make a free loop look blocked; the price is that a blocking *wait*
+    shorter than ``stall`` goes unseen (the heartbeat of :func:`meshlink.testing.watch_loop`
+    sees those, on a quiet machine)."""
+
+    def __init__(self, cpu: float = 0.04, stall: float = 0.3) -> None:
+        self.cpu, self.stall = cpu, stall
         self.reports: list[str] = []
 
-    def emit(self, record: logging.LogRecord) -> None:
-        message = record.getMessage()
-        if message.startswith("Executing"):
-            self.reports.append(message)
+    def observe(self, handle: asyncio.Handle, wall: float, cpu: float) -> None:
+        if cpu >= self.cpu or wall >= self.stall:
+            owner = getattr(getattr(handle, "_callback", None), "__self__", None)
+            what = repr(owner) if isinstance(owner, asyncio.Task) else repr(handle)
+            self.reports.append(f"{what} took {wall * 1000:.0f} ms ({cpu * 1000:.0f} ms CPU)")
 
 
 @pytest.fixture
-async def blocking_detector() -> AsyncIterator[SlowSteps]:
-    """Put the running asyncio loop in debug mode with ``slow_callback_duration = 50 ms`` for
-    the test: every loop step (task step or callback) that runs longer is recorded in
-    ``.reports`` with its task, so a test can ``assert not detector.reports``."""
-    loop = asyncio.get_running_loop()
-    debug, slow = loop.get_debug(), loop.slow_callback_duration
+def blocking_detector(monkeypatch: pytest.MonkeyPatch) -> SlowSteps:
+    """Time every loop step for the test (see :class:`SlowSteps`), so a test can
+    ``assert not detector.reports``."""
     detector = SlowSteps()
-    logger = logging.getLogger("asyncio")
-    logger.addHandler(detector)
-    loop.set_debug(True)
-    loop.slow_callback_duration = 0.05
-    try:
-        yield detector
-    finally:
-        loop.set_debug(debug)
-        loop.slow_callback_duration = slow
-        logger.removeHandler(detector)
+    run = asyncio.Handle._run
+
+    def timed(handle: asyncio.Handle) -> None:
+        wall, cpu = time.perf_counter(), time.thread_time()
+        try:
+            run(handle)
+        finally:
+            detector.observe(handle, time.perf_counter() - wall, time.thread_time() - cpu)
+
+    monkeypatch.setattr(asyncio.Handle, "_run", timed)
+    return detector

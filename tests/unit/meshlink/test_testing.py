@@ -7,6 +7,7 @@ import time
 from typing import TYPE_CHECKING
 
 import anyio
+import anyio.lowlevel
 import pytest
 
 from meshlink.testing import free_port, watch_loop
@@ -22,10 +23,20 @@ async def test_watch_loop_and_blocking_detector_see_a_blocked_loop(
 ) -> None:
     async with watch_loop(0.005) as watch:
         await anyio.sleep(0.02)
-        time.sleep(0.08)  # noqa: ASYNC251 - the blocking call this test must detect
+        time.sleep(0.08)  # noqa: ASYNC251 - the blocking call the heartbeat must see
         await anyio.sleep(0.02)
     assert watch.max_gap > 0.05
-    assert any(" took " in report for report in blocking_detector.reports)
+    assert not blocking_detector.reports  # a short wait uses no CPU: below the stall limit
+    end = time.thread_time() + 0.06
+    while time.thread_time() < end:  # a computation on the loop: 60 ms of CPU
+        pass
+    await anyio.lowlevel.checkpoint()  # the step ends here
+    time.sleep(blocking_detector.stall + 0.02)  # noqa: ASYNC251 - a long blocking wait
+    await anyio.lowlevel.checkpoint()
+    busy, stalled = blocking_detector.reports
+    assert " took " in busy and busy.endswith(" ms CPU)")
+    assert int(busy.rsplit("(", 1)[1].split()[0]) >= 60
+    assert int(stalled.rsplit(" took ", 1)[1].split()[0]) >= 300
 
 
 async def test_watch_loop_stays_quiet_on_a_free_loop() -> None:
