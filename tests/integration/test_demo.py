@@ -12,14 +12,20 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
+import warnings
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 import rerun.chunk
+from rerun.error_utils import RerunWarning
+
+from meshlink.testing import free_port
 
 pytestmark = [pytest.mark.slow, pytest.mark.sim, pytest.mark.zenoh]
 
@@ -167,3 +173,94 @@ def test_ctrl_c_aborts_the_task_and_stops_cleanly(tmp_path: Path) -> None:
     assert "aborted" in out and "FAILED (preempted)" in out, "the runs were stopped"
     assert "== GOAL NOT REACHED" in out and "stopped cleanly" in out
     verify_rrd(rrd)
+
+
+def _viewer(port: int, save: Path, *urls: str) -> subprocess.Popen[bytes]:
+    """A headless rerun "viewer": ``rerun --save`` writes what it receives to ``save`` (its
+    own gRPC server bound to 127.0.0.1:``port``; ``urls``: servers to pull from)."""
+    return subprocess.Popen(
+        [str(RERUN), "--bind", "127.0.0.1", "--port", str(port), "--save", str(save), *urls],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+
+def _wait_for(check: Callable[[], bool], what: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.05)
+
+
+def _listening(port: int) -> bool:
+    with socket.socket() as s:
+        return s.connect_ex(("127.0.0.1", port)) == 0
+
+
+def _received(path: Path) -> Recording:
+    """What a ``rerun --save`` file holds so far (it has no footer until that viewer ends)."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "RRD file has no footer", RerunWarning)
+        return Recording(path)
+
+
+def _goal_lines(path: Path) -> list[str]:
+    if not path.exists() or path.stat().st_size == 0:
+        return []
+    try:
+        return [line for line in _received(path).lines("/demo/log") if "GOAL REACHED" in line]
+    except ValueError:  # the last chunk is still being written: look again
+        return []
+
+
+@pytest.mark.timeout(300)
+def test_the_recording_streams_to_a_viewer_and_is_served_to_a_late_one(tmp_path: Path) -> None:
+    """``--rerun-connect URL`` streams the run to a viewer that is up before it starts;
+    ``--rerun-serve`` keeps the finished run available to a viewer that connects afterwards
+    (until Ctrl-C). Both receive the whole mission, goal included."""
+    live, late = tmp_path / "live.rrd", tmp_path / "late.rrd"
+    live_port, served_port, late_port = free_port(), free_port(), free_port()
+    viewers = [_viewer(live_port, live)]
+    try:
+        _wait_for(lambda: _listening(live_port), "the live viewer")
+        with subprocess.Popen(
+            [sys.executable, "-m", "skimesh", "demo", "--rrd", str(tmp_path / "run.rrd"),
+             "--rerun-connect", f"rerun+http://127.0.0.1:{live_port}/proxy",
+             "--rerun-serve", "--rerun-port", str(served_port)],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        ) as process:  # fmt: skip
+            try:
+                assert process.stdout is not None
+                lines = []
+                for line in process.stdout:
+                    lines.append(line)
+                    if line.startswith("[demo] serving the recording"):
+                        break
+                out = "".join(lines)
+                assert "== GOAL REACHED" in out, out[-3000:]
+                assert f"rerun+http://127.0.0.1:{served_port}/proxy" in out
+                url = f"rerun+http://127.0.0.1:{served_port}/proxy"
+                viewers.append(_viewer(late_port, late, url))
+                _wait_for(lambda: bool(_goal_lines(late)), "the late viewer's copy")
+                process.send_signal(signal.SIGINT)
+                assert process.wait(timeout=60) == 0
+            finally:
+                if process.poll() is None:
+                    process.kill()
+        _wait_for(lambda: bool(_goal_lines(live)), "the live viewer's copy")
+    finally:
+        for viewer in viewers:
+            viewer.send_signal(signal.SIGINT)
+            try:
+                viewer.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                viewer.kill()
+                viewer.wait()
+    for path in (live, late):
+        rec = _received(path)
+        assert rec.rows["/world/r1.forearm"] > 50, path.name  # the scene over time
+        assert "succeeded" in rec.lines("/task/events")[-1], path.name
