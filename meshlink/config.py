@@ -22,6 +22,7 @@ import argparse
 import json
 import os
 import re
+from collections.abc import Callable
 from typing import Annotated, Any, Literal, get_args
 
 import msgspec
@@ -169,29 +170,49 @@ def to_zenoh_config(cfg: MeshConfig) -> zenoh.Config:
     return zc
 
 
-def add_mesh_arguments(parser: argparse.ArgumentParser, *, default_mode: Mode = "client") -> None:
-    """Add ``--connect``, ``--listen`` (both repeatable), ``--config``, ``--mesh`` and
-    ``--mode`` to ``parser``; read them back with :func:`mesh_config_from_args`."""
+def add_mesh_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    default_mode: Mode = "client",
+    router: bool = False,
+    config_type: Callable[[str], str] = str,
+) -> None:
+    """Add the Zenoh flags every long-running command shares: ``--connect`` and ``--listen``
+    (both repeatable), ``--config FILE`` (Zenoh JSON5), then ``--mesh`` and ``--mode``; read
+    them back with :func:`mesh_config_from_args`.
+
+    ``router=True`` is for ``skimesh router``: ``--connect`` links it to other routers, and
+    there is no ``--mesh`` or ``--mode`` (a router carries every mesh and is a router).
+    ``config_type`` converts (and may reject, with ``argparse.ArgumentTypeError``) the
+    ``--config`` value, e.g. to point a misplaced file at the right flag.
+    """
+    if router:
+        connect_help = "another router to link this one to, repeatable (one router per host)"
+        listen_help = (
+            f"endpoint to listen on, repeatable (default {DEFAULT_ROUTER_ENDPOINT}: loopback "
+            "only; e.g. tcp/0.0.0.0:7447 to accept other hosts)"
+        )
+    else:
+        connect_help = (
+            f"router to connect to, repeatable (clients default to {DEFAULT_ROUTER_ENDPOINT})"
+        )
+        listen_help = (
+            "endpoint to listen on, repeatable (routers default to "
+            f"{DEFAULT_ROUTER_ENDPOINT}, clients listen on nothing)"
+        )
     group = parser.add_argument_group("mesh (Zenoh)")
-    group.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help=f"router to connect to, repeatable (clients default to {DEFAULT_ROUTER_ENDPOINT})",
-    )
-    group.add_argument(
-        "--listen",
-        action="append",
-        metavar="ENDPOINT",
-        help="endpoint to listen on, repeatable (routers default to "
-        f"{DEFAULT_ROUTER_ENDPOINT}, clients listen on nothing)",
-    )
+    group.add_argument("--connect", action="append", metavar="ENDPOINT", help=connect_help)
+    group.add_argument("--listen", action="append", metavar="ENDPOINT", help=listen_help)
     group.add_argument(
         "--config",
         dest="zenoh_config",
+        type=config_type,
         metavar="FILE",
-        help="Zenoh JSON5 config file, loaded first; the other flags override it",
+        help="Zenoh JSON5 config file (TLS, auth, ACL...), loaded first; the other flags "
+        "override it",
     )
+    if router:
+        return
     group.add_argument(
         "--mesh",
         default="default",

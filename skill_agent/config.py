@@ -1,4 +1,4 @@
-"""The configuration of one skill agent (``skimesh agent --config FILE``), read from TOML.
+"""The configuration of one skill agent (``skimesh agent --agent-config FILE``), read from TOML.
 
 Example (``configs/agents/pick.toml``)::
 

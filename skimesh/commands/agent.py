@@ -48,16 +48,16 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="run a skill agent for one robot or smart device",
         description="Serve a skill agent: register it in the world model, answer skill "
         "requests on agents/NAME/rpc, publish run progress. Stops cleanly on Ctrl-C / SIGTERM.",
-        conflict_handler="resolve",  # our --config is the agent config; Zenoh's moves below
     )
-    add_mesh_arguments(p)
-    p.add_argument("--zenoh-config", dest="zenoh_config", metavar="FILE", help="Zenoh JSON5 file")
+    add_mesh_arguments(p, config_type=_zenoh_config_file)
     where = p.add_mutually_exclusive_group(required=True)
-    where.add_argument("--config", dest="agent_config", metavar="FILE", help="agent config (TOML)")
     where.add_argument(
         "--scenario",
         help="with --robot: the agent config the scenario names for that robot or appliance "
         "(a scenario name under configs/scenarios or a scenario file)",
+    )
+    where.add_argument(
+        "--agent-config", metavar="FILE", help="an agent config file (TOML) instead of --scenario"
     )
     p.add_argument("--robot", help="the robot or appliance (or agent name) of --scenario")
     p.add_argument("--simulate", action="store_true", help="simulated-outcome mode (no hardware)")
@@ -109,6 +109,17 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     stop.add_argument("run_id")
     _client_arguments(stop)
     stop.set_defaults(func=lambda a: _client(a, _stop))
+
+
+def _zenoh_config_file(path: str) -> str:
+    """``--config`` is the Zenoh JSON5 file, as for every command; an agent TOML there (it
+    used to be the agent's flag) is a usage error naming ``--agent-config``."""
+    if path.lower().endswith(".toml"):
+        raise argparse.ArgumentTypeError(
+            f"{path} is TOML, but --config takes a Zenoh JSON5 file; give the agent's config "
+            f"with --agent-config {path} (or use --scenario S --robot R)"
+        )
+    return path
 
 
 def _client_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,4 +1,10 @@
-"""``skimesh router``: a Zenoh router from the Python wheel (any ``zenohd`` works the same)."""
+"""``skimesh router``: a Zenoh router from the Python wheel (any ``zenohd`` works the same).
+
+It takes the Zenoh flags of every other command (``--connect``, ``--listen``, ``--config``;
+:func:`meshlink.add_mesh_arguments`). ``--connect`` links it to other routers: on several
+hosts, one router per host, each connected to the others, and every process a client of its
+own host's router.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +16,7 @@ from pathlib import Path
 
 import anyio
 
-from meshlink import DEFAULT_ROUTER_ENDPOINT, run_router
+from meshlink import DEFAULT_ROUTER_ENDPOINT, add_mesh_arguments, run_router
 
 from ..runtime import run_service
 
@@ -20,33 +26,35 @@ __all__ = ["add_parser"]
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "router",
-        help="run a Zenoh router (one per site; agents and tools connect to it)",
+        help="run a Zenoh router (one per site or host; agents and tools connect to it)",
         description="Run a Zenoh router. Agents, the world model and the CLI connect to it "
-        "in client mode. Listen on a routable address to accept other hosts.",
+        "in client mode. Listen on a routable address to accept other hosts; --connect to "
+        "link it to the routers of other hosts.",
     )
-    p.add_argument(
-        "--listen",
-        action="append",
-        metavar="ENDPOINT",
-        help=f"endpoint to listen on, repeatable (default {DEFAULT_ROUTER_ENDPOINT}); "
-        "e.g. tcp/0.0.0.0:7447 to accept other hosts",
-    )
-    p.add_argument("--config", metavar="FILE", help="Zenoh JSON5 config (TLS, auth, ACL...)")
+    add_mesh_arguments(p, router=True)
     p.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
-    # --listen wins; else the config file's listen endpoints; else the loopback default.
-    listen = list(args.listen or ([] if args.config else [DEFAULT_ROUTER_ENDPOINT]))
-    if args.config and not Path(args.config).is_file():
-        print(f"skimesh router: no config file {args.config}", file=sys.stderr)
+    # --listen wins; else the config file's listen endpoints; else the loopback default
+    # (meshlink.router_config). --connect likewise replaces the file's connect endpoints.
+    listen: list[str] = args.listen or []
+    connect: list[str] = args.connect or []
+    config_file: str | None = args.zenoh_config
+    if config_file and not Path(config_file).is_file():
+        print(f"skimesh router: no config file {config_file}", file=sys.stderr)
         return 2
 
     async def main() -> int:
-        where = ", ".join(listen) or f"the endpoints of {args.config}"
+        run = functools.partial(run_router, listen, connect=connect, config_file=config_file)
         async with anyio.create_task_group() as tg:  # errors: printed by skimesh.cli.main
-            await tg.start(functools.partial(run_router, listen, config_file=args.config))
-            logging.getLogger("skimesh").warning("router listening on %s", where)
+            await tg.start(run)
+            where = ", ".join(listen) or (
+                f"the endpoints of {config_file}" if config_file else DEFAULT_ROUTER_ENDPOINT
+            )
+            # Zenoh keeps retrying a router's connect endpoints: the others may start later
+            linked = f", connecting to {', '.join(connect)}" if connect else ""
+            logging.getLogger("skimesh").warning("router listening on %s%s", where, linked)
         return 0
 
     return run_service(main)

@@ -186,10 +186,8 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
             probe.expect(lambda m: "ready" in m, timeout=60)
             assert "revision" in s.ask(probe, cmd="scene")
             for robot in ("r1", "r2"):
-                agent = ["-m", "skimesh", "agent", "--config", str(folder / f"{robot}.toml")]
-                s.start(
-                    robot, robot, *agent, "--simulate", "--zenoh-config", client_cfg, *s.flags()
-                )
+                agent = ["-m", "skimesh", "agent", "--agent-config", str(folder / f"{robot}.toml")]
+                s.start(robot, robot, *agent, "--simulate", "--config", client_cfg, *s.flags())
             for robot in ("r1", "r2"):
                 s.children[robot].wait_stderr(f"agent {robot} ready", timeout=60)
             task_agent = ["-m", "skimesh", "task-agent", "--config", client_cfg, *s.flags()]

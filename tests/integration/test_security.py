@@ -144,9 +144,8 @@ def acl_site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[AclSite]:
         store_flags = ["--data", str(folder / "wm"), *site.flags("wm")]
         children.append(Child(["-m", "skimesh", "wm", *store_flags], name="store"))
         children[-1].wait_stderr("world model ready")
-        agent = ["-m", "skimesh", "agent", "--config", str(agent_toml), *site.flags("agent-r1")]
-        agent[-2] = "--zenoh-config"  # `skimesh agent --config` is the agent's TOML
-        children.append(Child(agent, name="agent r1"))
+        agent = ["-m", "skimesh", "agent", "--agent-config", str(agent_toml)]
+        children.append(Child([*agent, *site.flags("agent-r1")], name="agent r1"))
         children[-1].wait_stderr("agent r1 ready")
         yield site
     finally:

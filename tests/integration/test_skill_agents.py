@@ -1,5 +1,5 @@
 """Skill agents over real Zenoh on loopback: a world-model store and two agents, each in its own
-process (``python -m skimesh agent --config ...``), driven by an AgentClient in the test.
+process (``python -m skimesh agent --agent-config ...``), driven by an AgentClient in the test.
 
 Covers: skills listed and registered in the world model; parallel runs on disjoint devices
 overlap in time; a start on a busy device is refused with ResourceBusyError across the wire
@@ -105,7 +105,7 @@ class Site:
         skills = [f"{EXAMPLES}/pick_part.py", f"{EXAMPLES}/noop.py", str(self.folder / "probe.py")]
         path.write_text(agent_config(name, grippers, skills))
         child = Child(
-            ["-m", "skimesh", "agent", "--config", str(path), *self.mesh_flags()],
+            ["-m", "skimesh", "agent", "--agent-config", str(path), *self.mesh_flags()],
             name=f"agent {name}",
         )
         child.wait_stderr(f"agent {name} ready")
@@ -238,6 +238,11 @@ async def test_busy_device_is_refused_across_the_wire_or_queued(site: Site) -> N
         with anyio.fail_after(20):
             async with anyio.create_task_group() as tg:
                 queued: list[RunResult] = []
+                in_line = anyio.Event()
+
+                def note(event: RunEvent) -> None:
+                    if isinstance(event, Progress) and event.message.startswith("queued for"):
+                        in_line.set()
 
                 async def wait_queued() -> None:
                     params: dict[str, Value] = {
@@ -246,10 +251,10 @@ async def test_busy_device_is_refused_across_the_wire_or_queued(site: Site) -> N
                         "gripper": left,
                         "motion_time": 0.1,
                     }
-                    queued.append(await client.run("pick_part", params, queue=True))
+                    queued.append(await client.run("pick_part", params, queue=True, on_event=note))
 
                 tg.start_soon(wait_queued)
-                await anyio.sleep(0.3)
+                await in_line.wait()  # the agent put it in line behind the first run
                 stopped = await client.stop(first.run_id)
             assert stopped.reason == "preempted"
             assert (
@@ -374,17 +379,22 @@ async def test_sigkill_is_seen_by_watchers_clients_and_the_world_model(site: Sit
                 ):
                     assert (await anext(aiter(watch))).alive  # history: the agents alive now
                     failures: list[BaseException] = []
+                    running = anyio.Event()
+
+                    def note(event: RunEvent) -> None:
+                        if isinstance(event, Progress) and event.message.startswith("start "):
+                            running.set()
 
                     async def waiting_client() -> None:
                         try:
                             await AgentClient(mesh, "victim", lost_grace=0.5).run(
-                                "probe", {"seconds": 60.0}
+                                "probe", {"seconds": 60.0}, on_event=note
                             )
                         except AgentTransportError as e:
                             failures.append(e)
 
                     tg.start_soon(waiting_client)
-                    await anyio.sleep(0.5)
+                    await running.wait()  # the client waits on a run inside execute
                     victim.kill()  # SIGKILL, by PID
                     async for change in watch:
                         if change.key == key and not change.alive:

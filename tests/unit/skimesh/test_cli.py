@@ -1,0 +1,83 @@
+"""The ``skimesh`` command line, parsed only (no Zenoh session): the same Zenoh flags on every
+long-running command, and clear usage errors."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from meshlink import MeshConfig, mesh_config_from_args
+from skimesh.cli import build_parser, main
+
+ROUTER_A, ROUTER_B = "tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"
+ZENOH_FLAGS = ["--connect", ROUTER_A, "--connect", ROUTER_B, "--config", "site.json5"]
+
+#: Every long-running command, with the arguments it needs besides the Zenoh flags.
+SERVICES = {
+    "router": [],
+    "wm": ["--data", "wm-data"],
+    "sim": ["--scenario", "kitting"],
+    "agent": ["--scenario", "kitting", "--robot", "r1"],
+    "task-agent": [],
+    "operator": [],
+}
+
+
+def parse(*argv: str) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
+
+
+@pytest.mark.parametrize("command", sorted(SERVICES))
+def test_every_service_takes_repeated_connect_and_a_zenoh_config(command: str) -> None:
+    args = parse(command, *SERVICES[command], *ZENOH_FLAGS)
+    assert args.connect == [ROUTER_A, ROUTER_B]
+    assert args.zenoh_config == "site.json5"
+    assert args.listen is None
+
+
+@pytest.mark.parametrize("command", ["wm", "sim", "agent", "task-agent", "operator"])
+def test_the_zenoh_flags_make_the_same_mesh_config_everywhere(command: str) -> None:
+    args = parse(command, *SERVICES[command], *ZENOH_FLAGS, "--mesh", "lab")
+    assert mesh_config_from_args(args) == MeshConfig(
+        connect=(ROUTER_A, ROUTER_B), config_file="site.json5", mesh="lab"
+    )
+
+
+def test_the_router_links_to_other_routers_and_has_no_mesh_or_mode(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = parse("router", "--listen", "tcp/0.0.0.0:7447", "--connect", ROUTER_A)
+    assert (args.listen, args.connect) == (["tcp/0.0.0.0:7447"], [ROUTER_A])
+    with pytest.raises(SystemExit) as exit_info:
+        parse("router", "--mode", "peer")
+    assert exit_info.value.code == 2
+    assert "unrecognized arguments: --mode" in capsys.readouterr().err
+
+
+def test_the_agent_takes_its_own_toml_as_agent_config() -> None:
+    args = parse("agent", "--agent-config", "r1.toml", "--config", "client.json5")
+    assert (args.agent_config, args.zenoh_config) == ("r1.toml", "client.json5")
+    assert args.scenario is None
+
+
+@pytest.mark.parametrize("toml", ["r1.toml", "configs/agents/kitting/R2.TOML"])
+def test_an_agent_toml_given_to_config_points_to_agent_config(
+    toml: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["agent", "--config", toml, "--connect", ROUTER_A])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--agent-config {toml}" in err
+    assert "Zenoh JSON5" in err
+    assert "Traceback" not in err
+
+
+def test_the_agent_needs_a_scenario_or_an_agent_config(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["agent", "--config", "client.json5"])
+    assert exit_info.value.code == 2
+    assert "one of the arguments --scenario --agent-config is required" in capsys.readouterr().err
