@@ -9,6 +9,7 @@ import subprocess
 import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -135,8 +136,12 @@ async def test_remote_errors_cancellation_and_states(
         assert info.value.position_error > 1.0  # the attributes travelled too
 
         async with anyio.create_task_group() as tg:  # busy is reported as such
-            tg.start_soon(arm.move_joints, READY)
-            await world.sleep(0.1)
+            moving = anyio.Event()
+            tg.start_soon(
+                partial(arm.move_joints, READY, duration=3.0, progress=lambda _: moving.set())
+            )
+            with anyio.fail_after(5):
+                await moving.wait()  # the server reports the motion under way
             with pytest.raises(DeviceBusyError):
                 await arm.move_joints({"elbow": 0.2})
             tg.cancel_scope.cancel()  # cancelling the caller stops the remote arm

@@ -257,21 +257,20 @@ async def test_rejection_and_lost_service_fail_the_run(
             tg.cancel_scope.cancel()
 
         # A service that accepts, then disappears (its token goes): the run fails at once.
-        gone = anyio.Event()
-
         async def accept_then_vanish(query: IncomingQuery) -> list[Answer]:
             goal = decode_service_request(query.payload or b"")
-            gone.set()
+            started = Feedback(goal_id=goal.goal_id, message="started")
+            service_side.put(keys.feedback(goal.goal_id), encode(started))
             return [Answer(keys.goal(), encode(GoalAccepted(goal_id=goal.goal_id)))]
 
         async with anyio.create_task_group() as tg:
             await tg.start(service_side.serve, keys.goal(), accept_then_vanish)
             token = service_side.declare_token(keys.alive())
             await wait_alive(agent_side, "partner/picky")
+            ctx = FakeContext("run-lost", DESC)
 
             async def vanish() -> None:
-                await gone.wait()
-                await anyio.sleep(0.05)
+                await ctx.first_event.wait()  # the skill got the acceptance and follows the goal
                 token.undeclare()
 
             tg.start_soon(vanish)
@@ -279,5 +278,5 @@ async def test_rejection_and_lost_service_fail_the_run(
                 anyio.fail_after(10),
                 pytest.raises(SkillFailure, match="liveliness token disappeared"),
             ):
-                await skill.execute(FakeContext("run-lost", DESC))
+                await skill.execute(ctx)
             tg.cancel_scope.cancel()

@@ -252,16 +252,22 @@ async def test_missed_result_is_found_by_a_status_query(
 async def test_agent_disappearing_raises_transport_error(
     router_endpoint: str, mesh_name: str
 ) -> None:
-    async def script(request: AgentRequest) -> bytes | None:
-        if isinstance(request, StartRun):
-            return encode(RunStarted(run_id=request.run_id))
-        return encode(ErrorReply(code="unknown_run", message="gone"))
-
     async with (
         session(router_endpoint, mesh_name) as m,
         session(router_endpoint, mesh_name) as agent_side,
     ):
+
+        async def script(request: AgentRequest) -> bytes | None:
+            if isinstance(request, StartRun):
+                step = Progress(
+                    run_id=request.run_id, agent="f", skill="s", seq=1, state="executing"
+                )
+                agent_side.put(agent_side.keys.run_progress("f", request.run_id), encode(step))
+                return encode(RunStarted(run_id=request.run_id))
+            return encode(ErrorReply(code="unknown_run", message="gone"))
+
         client = AgentClient(m, "f", lost_grace=0.2)
+        running = anyio.Event()
         async with anyio.create_task_group() as tg, fake_agent(agent_side, "f", script):
 
             async def go() -> None:
@@ -269,11 +275,11 @@ async def test_agent_disappearing_raises_transport_error(
                     anyio.fail_after(5),
                     pytest.raises(AgentTransportError, match="disappeared"),
                 ):
-                    await client.run("s")
+                    await client.run("s", on_event=lambda _: running.set())
 
             tg.start_soon(go)
-            await anyio.sleep(0.3)
-            # the token is gone now (the fake agent left)
+            await running.wait()  # the client follows the run's progress
+            # the token goes now (the fake agent leaves)
 
 
 async def test_deadline_gives_up_and_stops_the_run(router_endpoint: str, mesh_name: str) -> None:
