@@ -25,7 +25,7 @@ from contextlib import AbstractAsyncContextManager, asynccontextmanager
 
 import anyio
 
-from .errors import ElementNotFoundError, TransportError
+from .errors import ConflictError, ElementNotFoundError, TransportError
 from .ontology import Ontology
 from .protocol import (
     AddElement,
@@ -65,6 +65,8 @@ from .replica import Replica
 from .transport import WmTransport, raise_for_error
 
 __all__ = ["WmClient"]
+
+_REGISTER_ATTEMPTS = 50  # a registration re-made against a busy world model, at most
 
 
 class WmClient:
@@ -335,12 +337,25 @@ class WmClient:
         """Register an agent, its robot, devices and skills (SkiROS ``registerRobot``).
 
         Returns the ids by ref: ``$agent``, ``$robot``, ``$device:<label>``, ``$skill:<name>``
-        for the elements this call created (existing ones are reused)."""
+        for the elements this call created (existing ones are reused). The transaction is
+        made from this replica and committed only if the store is still at the replica's
+        revision; otherwise it is made again once the replica caught up (two agents of one
+        robot starting together must find, not both add, the robot)."""
         onto = self.ontology
         subclasses = {name: onto.subclasses(name) for name in ("Agent", "Robot", "Skill")}
-        ops = registration_ops(self.replica.state, registration, subclasses=subclasses)
-        reply = await self.transact(ops)
-        return {k: v for k, v in reply.ids.items() if k.startswith("$")}
+        for _attempt in range(_REGISTER_ATTEMPTS):
+            state = self.replica.state
+            ops = registration_ops(state, registration, subclasses=subclasses)
+            try:
+                reply = await self.transact(ops, expect_revision=state.revision)
+            except ConflictError:  # the store moved on: catch up with it, then look again
+                await self.replica.wait_for_revision(state.revision + 1)
+                continue
+            return {k: v for k, v in reply.ids.items() if k.startswith("$")}
+        raise ConflictError(
+            f"registering agent {registration.agent!r}: the world model changed under each of "
+            f"{_REGISTER_ATTEMPTS} attempts"
+        )
 
     async def unregister_robot(self, agent: str) -> None:
         """Remove the agent and its skills from the world model (the robot stays)."""

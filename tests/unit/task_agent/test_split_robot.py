@@ -5,9 +5,8 @@ pick, place; arm, gripper, wrist camera) over the kitting scenario's scene, in m
 Covers: the two configs together are r1.toml cut in two; both agents register for the scene's
 robot r1 and discovery sees one robot with the union of their skills; unregistering one
 leaves the other; the planner drives r1 with one agent and picks with the other, in order.
-Known gap (strict xfail): two agents registering a robot that is not in the world model yet at
-the same moment each add one, so a split's agents start one after the other (or after the
-scene with the robot is loaded, as ``skimesh demo`` does).
+Two agents registering a robot that is not in the world model yet at the same moment find
+one robot: a registration commits only at the revision it was made from, else it is made again.
 The same over Zenoh, with each agent in its own process: tests/integration/test_split_robot.py.
 """
 
@@ -114,11 +113,6 @@ async def test_a_plan_drives_with_one_agent_then_picks_with_the_other(wm: WmClie
 
 
 @pytest.mark.anyio
-@pytest.mark.xfail(
-    strict=True,
-    reason="register_robot computes its transaction from the client's replica and the store "
-    "does not check it: two registrations of a new robot label at once add two robots",
-)
 async def test_two_agents_registering_a_new_robot_at_once_make_one_robot() -> None:
     ontology = Ontology.default()
     async with (
