@@ -90,17 +90,26 @@ def blueprint(
         # The recorder logs capsules (arm links) without a fill mode: wireframe by default.
         defaults=[rr.Capsules3D.from_fields(fill_mode="solid")],
     )
-    events = rrb.TextLogView(
-        origin="task/events",
-        name="Task events",
-        columns=rrb.TextLogColumns(
-            timeline_columns=[rrb.encodings.TimelineColumn(TIMELINE)],
-            text_log_columns=[
-                rrb.encodings.TextLogColumn("loglevel", visible=False),
-                rrb.encodings.TextLogColumn("body"),
-                rrb.encodings.TextLogColumn("entitypath", visible=False),
-            ],
-        ),
+
+    def text_log(origin: str, name: str, *, paths: bool) -> rrb.TextLogView:
+        return rrb.TextLogView(
+            origin=origin,
+            name=name,
+            columns=rrb.TextLogColumns(
+                timeline_columns=[rrb.encodings.TimelineColumn(TIMELINE)],
+                text_log_columns=[
+                    rrb.encodings.TextLogColumn("loglevel", visible=False),
+                    rrb.encodings.TextLogColumn("entitypath", visible=paths),
+                    rrb.encodings.TextLogColumn("body"),
+                ],
+            ),
+        )
+
+    # the task's events in front; each agent's event log (agents/<agent>/events) behind them
+    events = rrb.Tabs(
+        text_log("task/events", "Task events", paths=False),
+        text_log("agents", "Agents' event logs", paths=True),
+        active_tab=0,
     )
     overrides: dict[Any, Any] = {}  # entity path -> visualizer
     if robots:

@@ -42,9 +42,10 @@ from device_drivers.scenario import Scenario
 from device_drivers.world import SimWorld, WorldOptions
 from meshlink import Mesh, MeshConfig, open_mesh, run_router
 from skill_agent.config import AgentConfig, load_config
-from skill_agent.scenario_wm import scenario_ops
 from skill_agent.server import run_agent
 from wm_store import Ontology, StoreConfig, WmClient, WmStore, ZenohTransport, serve_store
+
+from .scenario_scene import scene_ops
 
 __all__ = ["DemoError", "Stack", "StackOptions", "agent_configs", "demo_stack", "free_port"]
 
@@ -210,7 +211,7 @@ async def demo_stack(
         wm = await stack.enter_async_context(WmClient.connect(ZenohTransport(mesh), author="demo"))
         if on_wm is not None:
             on_wm(wm)
-        reply = await wm.transact(scenario_ops(scenario, ontology=wm.ontology))
+        reply = await wm.transact(scene_ops(scenario, wm.replica.state, wm.ontology))
         ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
         say(
             f"world model: {len(wm.replica.state.elements)} elements of scenario "

@@ -1,7 +1,8 @@
 """``skimesh wm``: run the world-model store, or read and write it.
 
-``skimesh wm --data DIR`` serves the store. With a sub-command (``ls``, ``get``, ``tree``,
-``query``, ``sparql``, ``export``, ``import``, ``info``) it is a client of a running store.
+``skimesh wm --data DIR`` serves the store (``--scenario S``: with S's initial scene, loaded
+once). With a sub-command (``ls``, ``get``, ``tree``, ``query``, ``sparql``, ``export``,
+``import``, ``import-scenario``, ``info``) it is a client of a running store.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import logging
 import sys
 from collections.abc import Awaitable, Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import anyio
 import msgspec
@@ -34,6 +36,9 @@ from wm_store.protocol import Transact
 from ..connect import wm_session
 from ..render import element_line, render_tree
 from ..runtime import run_service
+
+if TYPE_CHECKING:
+    from device_drivers.scenario import Scenario
 
 __all__ = ["add_parser", "load_ontology"]
 
@@ -60,8 +65,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="group: group commit (default); fsync: one fsync per transaction; none: no fsync",
     )
     p.add_argument("--ontology", action="append", metavar="TTL", help="extra ontology file(s)")
-    p.add_argument(
+    initial = p.add_mutually_exclusive_group()
+    initial.add_argument(
         "--scene", metavar="TTL", help="import this scene at start if the store is empty"
+    )
+    initial.add_argument(
+        "--scenario",
+        metavar="NAME",
+        help="load this scenario's initial scene at start (a name under configs/scenarios, "
+        "e.g. kitting, or a scenario file), unless the store holds it already",
     )
     p.set_defaults(func=_serve)
     cmds = p.add_subparsers(dest="wm_command", metavar="COMMAND")
@@ -102,6 +114,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     imp.add_argument("file")
     imp.set_defaults(func=_import)
 
+    scen = cmds.add_parser(
+        "import-scenario", help="load a scenario's initial scene (once: not if it is there)"
+    )
+    scen.add_argument("name", metavar="SCENARIO", help="a scenario name (kitting, ...) or file")
+    scen.set_defaults(func=_import_scenario)
+
     info = cmds.add_parser("info", help="store revision, size, durability")
     info.set_defaults(func=lambda a: _client(a, _info))
 
@@ -119,6 +137,7 @@ def _serve(args: argparse.Namespace) -> int:
     config = StoreConfig(data_dir=args.data, durability=args.durability)
     ontology = load_ontology(args.ontology)
     scene = Path(args.scene).read_text() if args.scene else None
+    scenario = _read_scenario(args.scenario) if args.scenario else None
     mesh_config = mesh_config_from_args(args)
 
     async def main() -> int:
@@ -130,6 +149,8 @@ def _serve(args: argparse.Namespace) -> int:
             if scene is not None and not store.state.elements:
                 ops = import_turtle(scene, store.ontology, state=store.state)
                 await store.transact(Transact(ops=ops, author="scene-import"))
+            if scenario is not None:
+                await _load_scenario(store, scenario)
             _log.warning(
                 "world model ready: revision %d, %d elements on mesh %r",
                 store.revision,
@@ -227,6 +248,45 @@ def _import(args: argparse.Namespace) -> int:
         reply = await wm.transact(import_turtle(text, wm.ontology, state=wm.replica.state))
         added = sum(1 for k in reply.ids if not k.startswith("#"))
         print(f"imported {added} elements at revision {reply.revision}")
+        return 0
+
+    return _client(args, body)
+
+
+def _read_scenario(name: str) -> Scenario:
+    from ..scenario_scene import read_scenario
+
+    return read_scenario(name)
+
+
+async def _load_scenario(store: WmStore, scenario: Scenario) -> None:
+    """``--scenario``: load the scenario's scene into the store, unless it is there already."""
+    from ..scenario_scene import scene_loaded, scene_ops
+
+    ops = scene_ops(scenario, store.state, store.ontology)
+    if not ops:
+        there = ", ".join(scene_loaded(scenario, store.state)[:3])
+        _log.warning("scenario %r: its scene is in the store already (%s)", scenario.name, there)
+        return
+    reply = await store.transact(Transact(ops=ops, author="scenario-import"))
+    _log.warning("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)
+
+
+def _import_scenario(args: argparse.Namespace) -> int:
+    from ..scenario_scene import scene_loaded, scene_ops
+
+    scenario = _read_scenario(args.name)
+
+    async def body(wm: WmClient) -> int:
+        ops = scene_ops(scenario, wm.replica.state, wm.ontology)
+        if not ops:
+            there = ", ".join(scene_loaded(scenario, wm.replica.state)[:3])
+            print(f"scenario {scenario.name!r} is in the world model already ({there}): "
+                  "nothing imported")  # fmt: skip
+            return 0
+        reply = await wm.transact(ops)
+        added = sum(1 for k in reply.ids if k.startswith("$"))
+        print(f"scenario {scenario.name!r}: {added} elements at revision {reply.revision}")
         return 0
 
     return _client(args, body)
