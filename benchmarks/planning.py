@@ -1,8 +1,9 @@
 """Planning benchmarks: plan time beside the engine's own time on the same PDDL, and the
-makespan of the partial-order schedule beside running the same plan sequentially.
+makespan of the partial-order schedule beside running the same plan sequentially, estimated
+and measured.
 
     python benchmarks/planning.py               # full run (a few minutes on 2 cores)
-    python benchmarks/planning.py --quick       # 2x4 and 3x8 only, < 30 s
+    python benchmarks/planning.py --quick       # 2x4 and 3x8 only, < 45 s
     python benchmarks/planning.py --json out.json
 
 Scenario: the kitting scene of ``tests.assets.planning`` (robots with a gripper, a camera and
@@ -20,7 +21,11 @@ Per size, goal and engine (median of the repetitions):
   off, as the unified-planning engine runs it); Fast Downward runs its driver on the files with
   the same search configuration, as a child process (``sys.executable``, stopped by PID);
 - *makespan*: ``to_partial_order(plan)`` (with balancing) beside the plan's sequential
-  duration; the ideal for independent work is 1 / robots.
+  duration, both estimated from the skills' durations; the ideal for independent work is
+  1 / robots;
+- *executed*: the measured makespan (:mod:`benchmarks.planning_execution`): a plan for the
+  same sizes and goals run on simulated-outcome agents (``--time-scale``) as its partial order
+  and forced sequential, the measured ratio beside that plan's estimated one.
 
 Every solve has a time limit (``--timeout``), so a scale cliff shows as "timeout", not a hang.
 """
@@ -43,6 +48,7 @@ import kairos
 import msgspec
 
 from benchmarks.common import Row, fmt_num, format_grid, format_table, machine_info
+from benchmarks.planning_execution import execute_all, executed_details, executed_rows
 from task_agent.discovery_model import agents_from_view
 from task_agent.domain import build_task
 from task_agent.errors import PlannerTimeoutError
@@ -274,6 +280,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=60.0, help="seconds per solve")
     parser.add_argument("--engines", default=",".join(ENGINES), help="comma-separated engines")
     parser.add_argument("--json", type=Path, help="also write every case as JSON")
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=0.01,
+        metavar="S",
+        help="executed plans: wall seconds per skill second (0: do not execute)",
+    )
     args = parser.parse_args(argv)
     sizes = QUICK_SIZES if args.quick else SIZES
     reps = args.reps or (3 if args.quick else 7)
@@ -286,13 +299,17 @@ def main(argv: list[str] | None = None) -> int:
             for engine in engines:
                 print(f"{robots}x{parts} {goal} {engine} ...", file=sys.stderr, flush=True)
                 cases.append(run_case(robots, parts, goal, engine, reps, args.timeout))
-    print(format_table(rows(cases)))
+    runs = args.reps or (3 if args.quick else 5)
+    executed = execute_all(sizes, time_scale=args.time_scale, reps=runs) if args.time_scale else []
+    print(format_table(rows(cases) + executed_rows(executed)))
     print()
     print(details(cases))
+    if executed:
+        print(f"\nexecuted (time scale {args.time_scale:g}; seconds of the skills, medians)")
+        print(executed_details(executed))
     if args.json:
-        args.json.write_text(
-            json.dumps({"machine": info, "cases": msgspec.to_builtins(cases)}, indent=1)
-        )
+        out = {"machine": info, "cases": cases, "executed": executed}
+        args.json.write_text(json.dumps(msgspec.to_builtins(out), indent=1))
     return 0
 
 

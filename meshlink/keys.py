@@ -114,6 +114,15 @@ class KeySpace:
         """Progress events of every run of one agent (``runs/*/progress``)."""
         return f"{self.agent(agent)}/runs/*/progress"
 
+    def agent_events(self, name: str) -> str:
+        """Publication of one agent's structured event log (runs, progress, results,
+        refused starts, world-model writes)."""
+        return f"{self.agent(name)}/events"
+
+    def agents_events(self) -> str:
+        """The event logs of every agent (``agents/*/events``)."""
+        return f"{self.prefix}/agents/*/events"
+
     def name_of_agent_key(self, key: str) -> str:
         """The agent name in a key built by :meth:`agent` (as delivered by a liveliness
         watch on :meth:`agents`).

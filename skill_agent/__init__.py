@@ -10,6 +10,7 @@ Layers inside the package (pure core first, adapters last)::
     simulated, composite, core   simulated outcomes, composite skills, AgentCore
     config, plugins              agent config (TOML), skill plug-ins (entry points, paths, reload)
     server, client, adapter      Zenoh: serve an agent, call one, drive external services
+    event_feed                   Zenoh: read agents' event logs (``agents/*/events``)
 
 Write a skill: docs/guides/write-a-skill.md.
 """
@@ -53,6 +54,7 @@ from .errors import UnknownParameterError as UnknownParameterError
 from .errors import UnknownRunError as UnknownRunError
 from .errors import UnknownSkillError as UnknownSkillError
 from .errors import UnspecifiedParameterError as UnspecifiedParameterError
+from .event_feed import EventFeed as EventFeed
 from .events import EventLog as EventLog
 from .params import Specified as Specified
 from .params import check_description as check_description
@@ -71,6 +73,7 @@ from .protocol import IsSpecifiedCond as IsSpecifiedCond
 from .protocol import IsTypeCond as IsTypeCond
 from .protocol import ListRuns as ListRuns
 from .protocol import ListSkills as ListSkills
+from .protocol import LogEntry as LogEntry
 from .protocol import NotCond as NotCond
 from .protocol import OkReply as OkReply
 from .protocol import OrCond as OrCond
@@ -119,6 +122,7 @@ __all__ = [
     "CustomCondition",
     "EmptyCond",
     "ErrorReply",
+    "EventFeed",
     "EventLog",
     "ExternalServiceSkill",
     "HasPropertyCond",
@@ -127,6 +131,7 @@ __all__ = [
     "IsTypeCond",
     "ListRuns",
     "ListSkills",
+    "LogEntry",
     "NotCond",
     "OkReply",
     "OrCond",

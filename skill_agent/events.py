@@ -1,9 +1,10 @@
-"""The agent's structured event log (FRIEND II's event-logging server, in process).
+"""The agent's structured event log (FRIEND II's event-logging server).
 
 Every run started, progress event, result, refused start and world-model write the runtime
-makes is recorded as one :data:`LogEntry` (a tagged msgspec Struct, tag field ``kind``). The log
-keeps a bounded in-memory history, calls in-process subscribers, and, when given a path,
-appends one JSON object per line to that file for offline analysis::
+makes is recorded as one :data:`~skill_agent.protocol.LogEntry` (a tagged msgspec Struct, tag
+field ``kind``; wire schema in :mod:`skill_agent.protocol`). The log keeps a bounded in-memory
+history, calls in-process subscribers, and, when given a path, appends one JSON object per line
+to that file for offline analysis::
 
     log = EventLog(Path("events.jsonl"))
     ...
@@ -11,9 +12,14 @@ appends one JSON object per line to that file for offline analysis::
         match entry:
             case ResultEntry(result=r): print(r.run_id, r.reason)
 
+On the mesh, :func:`~skill_agent.server.serve_agent` subscribes its publisher to the log: every
+entry goes out on ``agents/<agent>/events`` (MessagePack, congestion control BLOCK), read with
+:class:`~skill_agent.event_feed.EventFeed`.
+
 :meth:`EventLog.record` never blocks the loop for long: a line is a buffered write flushed at
-once (no fsync), a few microseconds; subscriber callbacks run inline and must be quick (their
-exceptions are logged, never raised into the run that produced the event).
+once (no fsync), a few microseconds; subscriber callbacks run inline and must be quick (the
+mesh publisher only queues the entry; their exceptions are logged, never raised into the run
+that produced the event).
 """
 
 from __future__ import annotations
@@ -24,13 +30,18 @@ from collections import deque
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import IO, TypeAlias
+from typing import IO
 
 import msgspec
 
-from wm_store.protocol import Op, Value
-
-from .protocol import Progress, RunResult
+from .protocol import (
+    LogEntry,
+    ProgressEntry,
+    RefusedEntry,
+    ResultEntry,
+    RunStartedEntry,
+    WmWriteEntry,
+)
 
 __all__ = [
     "EventLog",
@@ -40,61 +51,31 @@ __all__ = [
     "ResultEntry",
     "RunStartedEntry",
     "WmWriteEntry",
+    "entry_agent",
+    "entry_run",
 ]
 
 _log = logging.getLogger(__name__)
-
-
-class RunStartedEntry(msgspec.Struct, tag="run_started", tag_field="kind", kw_only=True):
-    """A run was accepted (parameters specified, resources locked or queued)."""
-
-    agent: str
-    run_id: str
-    skill: str
-    params: dict[str, Value] = {}
-    inferred: dict[str, str] = {}
-    resources: list[str] = []
-    simulated: bool = False
-    queued: bool = False
-    parent: str = ""
-    stamp: float = 0.0
-
-
-class ProgressEntry(msgspec.Struct, tag="progress", tag_field="kind", kw_only=True):
-    progress: Progress
-    stamp: float = 0.0
-
-
-class ResultEntry(msgspec.Struct, tag="result", tag_field="kind", kw_only=True):
-    result: RunResult
-    stamp: float = 0.0
-
-
-class RefusedEntry(msgspec.Struct, tag="refused", tag_field="kind", kw_only=True):
-    """A start request refused before any run existed (or at its pre-condition check)."""
-
-    agent: str
-    skill: str
-    code: str
-    message: str
-    run_id: str = ""
-    stamp: float = 0.0
-
-
-class WmWriteEntry(msgspec.Struct, tag="wm_write", tag_field="kind", kw_only=True):
-    """A world-model transaction the runtime committed for a run."""
-
-    agent: str
-    run_id: str
-    revision: int
-    ops: list[Op]
-    stamp: float = 0.0
-
-
-LogEntry: TypeAlias = RunStartedEntry | ProgressEntry | ResultEntry | RefusedEntry | WmWriteEntry
-
 _encoder = msgspec.json.Encoder()
 _decoder = msgspec.json.Decoder(LogEntry)
+
+
+def entry_agent(entry: LogEntry) -> str:
+    """The agent that recorded ``entry``."""
+    if isinstance(entry, ProgressEntry):
+        return entry.progress.agent
+    if isinstance(entry, ResultEntry):
+        return entry.result.agent
+    return entry.agent
+
+
+def entry_run(entry: LogEntry) -> str:
+    """The run ``entry`` is about (``""``: a start refused before the run had an id)."""
+    if isinstance(entry, ProgressEntry):
+        return entry.progress.run_id
+    if isinstance(entry, ResultEntry):
+        return entry.result.run_id
+    return entry.run_id
 
 
 class EventLog:

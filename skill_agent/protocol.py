@@ -9,9 +9,10 @@ Key space (prefix ``skimesh/<mesh>``):
 - ``agents/<agent>/skills``                queryable: :class:`SkillsReply`
 - ``agents/<agent>/rpc``                   queryable: :data:`AgentRequest` -> :data:`AgentReply`
 - ``agents/<agent>/runs/<run>/progress``   publication: :data:`RunEvent` (progress, then one result)
+- ``agents/<agent>/events``                publication: :data:`LogEntry` (the agent's event log)
 
-Unions are tagged (``request``, ``reply``, ``cond``, ``event``); messages only gain fields with
-defaults; ``schema_version`` says who wrote them.
+Unions are tagged (``request``, ``reply``, ``cond``, ``event``, ``kind``); messages only gain
+fields with defaults; ``schema_version`` says who wrote them.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import Annotated, Any, Literal, TypeAlias
 import msgspec
 from msgspec import Meta, Struct
 
-from wm_store.protocol import Comparator, Query, Value
+from wm_store.protocol import Comparator, Op, Query, Value
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -37,6 +38,7 @@ __all__ = [
     "IsTypeCond",
     "ListRuns",
     "ListSkills",
+    "LogEntry",
     "NotCond",
     "OkReply",
     "OrCond",
@@ -44,9 +46,12 @@ __all__ = [
     "ParamSpec",
     "PauseRun",
     "Progress",
+    "ProgressEntry",
     "PropertyCond",
+    "RefusedEntry",
     "RelationCond",
     "Reload",
+    "ResultEntry",
     "ResultReason",
     "ResumeRun",
     "RunEvent",
@@ -54,6 +59,7 @@ __all__ = [
     "RunInfo",
     "RunResult",
     "RunStarted",
+    "RunStartedEntry",
     "RunState",
     "RunStatus",
     "RunsReply",
@@ -61,7 +67,9 @@ __all__ = [
     "SkillsReply",
     "StartRun",
     "StopRun",
+    "WmWriteEntry",
     "decode_event",
+    "decode_log_entry",
     "decode_reply",
     "decode_request",
     "encode",
@@ -382,12 +390,74 @@ class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True)
 
 AgentReply: TypeAlias = SkillsReply | RunStarted | RunFinished | RunsReply | OkReply | ErrorReply
 
+# --------------------------------------------------------------------------- event log
+# One entry per thing the agent's runtime did (``skill_agent.events.EventLog``), published on
+# ``agents/<agent>/events`` and appended to the agent's JSON-lines file. Tag field ``kind``;
+# not frozen: the log stamps an entry when it records it.
+
+
+class RunStartedEntry(Struct, tag="run_started", tag_field="kind", kw_only=True):
+    """A run was accepted (parameters specified, resources locked or queued); ``parent``: the
+    run of a composite skill this one is a sub-run of."""
+
+    agent: str
+    run_id: str
+    skill: str
+    params: dict[str, Value] = {}
+    inferred: dict[str, str] = {}
+    resources: list[str] = []
+    simulated: bool = False
+    queued: bool = False
+    parent: str = ""
+    stamp: float = 0.0
+    schema_version: int = SCHEMA_VERSION
+
+
+class ProgressEntry(Struct, tag="progress", tag_field="kind", kw_only=True):
+    progress: Progress
+    stamp: float = 0.0
+    schema_version: int = SCHEMA_VERSION
+
+
+class ResultEntry(Struct, tag="result", tag_field="kind", kw_only=True):
+    result: RunResult
+    stamp: float = 0.0
+    schema_version: int = SCHEMA_VERSION
+
+
+class RefusedEntry(Struct, tag="refused", tag_field="kind", kw_only=True):
+    """A start request refused before any run existed (or at its pre-condition check)."""
+
+    agent: str
+    skill: str
+    code: str
+    message: str
+    run_id: str = ""
+    stamp: float = 0.0
+    schema_version: int = SCHEMA_VERSION
+
+
+class WmWriteEntry(Struct, tag="wm_write", tag_field="kind", kw_only=True):
+    """A world-model transaction the runtime committed for a run (effects, or a skill's own
+    ``ctx.transact``)."""
+
+    agent: str
+    run_id: str
+    revision: int
+    ops: list[Op]
+    stamp: float = 0.0
+    schema_version: int = SCHEMA_VERSION
+
+
+LogEntry: TypeAlias = RunStartedEntry | ProgressEntry | ResultEntry | RefusedEntry | WmWriteEntry
+
 # --------------------------------------------------------------------------- codecs
 
 _encoder = msgspec.msgpack.Encoder()
 _request_decoder = msgspec.msgpack.Decoder(AgentRequest)
 _reply_decoder = msgspec.msgpack.Decoder(AgentReply)
 _event_decoder = msgspec.msgpack.Decoder(RunEvent)
+_entry_decoder = msgspec.msgpack.Decoder(LogEntry)
 
 
 def encode(message: Any) -> bytes:
@@ -404,3 +474,7 @@ def decode_reply(data: bytes) -> AgentReply:
 
 def decode_event(data: bytes) -> RunEvent:
     return _event_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+
+
+def decode_log_entry(data: bytes) -> LogEntry:
+    return _entry_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped

@@ -12,6 +12,10 @@ no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
 - ``agents/<a>/runs/<run>/progress``  publication (BLOCK): every :data:`RunEvent` of the run,
   in order, ending with its :class:`RunResult`; progress events may wait up to 2 ms to go out
   in a burst, a result goes at once (:class:`RunEventPublisher`);
+- ``agents/<a>/events``  publication (BLOCK): every :data:`~skill_agent.protocol.LogEntry` of
+  the agent's event log (runs started, progress, results, refused starts, world-model writes),
+  in order, through the same publisher (queued on the loop, sent in the same bursts; a run's
+  entries go out before its result on the progress key);
 - ``agents/<a>``  liveliness token, declared once the queryables are up, so whoever sees the
   agent alive can call it.
 
@@ -58,6 +62,7 @@ from .protocol import (
     ErrorReply,
     ListRuns,
     ListSkills,
+    LogEntry,
     OkReply,
     PauseRun,
     Reload,
@@ -179,21 +184,40 @@ class AgentService:
 
 
 class RunEventPublisher:
-    """Publishes run events on ``agents/<a>/runs/<run>/progress``, in order, in bursts.
+    """Publishes run events on ``agents/<a>/runs/<run>/progress`` and event-log entries on
+    ``agents/<a>/events``, in order, in bursts.
 
     A Zenoh put after the session was idle for a moment costs 100-200 us here (the wake-up of
-    Zenoh's send path); puts back to back cost ~10 us each. So progress events wait (at most
-    ``max_delay`` seconds) and go out together, and a :class:`RunResult` sends everything
-    pending at once, itself last: a short run's seven events cost about one put, and no result
-    is ever delayed. Measured: a no-op run from another process ~35% faster than with one put
-    per event as it happens (``docs/benchmarks.md``, Skills)."""
+    Zenoh's send path); puts back to back cost ~10 us each. So progress events and log entries
+    wait (at most ``max_delay`` seconds) and go out together, and a :class:`RunResult` sends
+    everything pending at once, itself last: a short run's seven events cost about one put,
+    and no result is ever delayed. Measured: a no-op run from another process ~35% faster than
+    with one put per event as it happens (``docs/benchmarks.md``, Skills). :meth:`publish` and
+    :meth:`record` only queue (they are called inline by the core and its event log)."""
 
     def __init__(self, mesh: Mesh, agent: str, *, max_delay: float = 0.002) -> None:
         self.mesh = mesh
         self.agent = agent
         self.max_delay = max_delay
+        self._events_key = mesh.keys.agent_events(agent)
         self._pending: list[tuple[str, bytes]] = []
         self._wake = anyio.Event()
+
+    def attach(self, core: AgentCore) -> Callable[[], None]:
+        """Publish ``core``'s run events and its event log; returns the detach function."""
+        detach_events = core.subscribe(self.publish)
+        detach_log = core.events.subscribe(self.record)
+
+        def detach() -> None:
+            detach_events()
+            detach_log()
+
+        return detach
+
+    def record(self, entry: LogEntry) -> None:
+        """Queue an event-log entry (an :class:`EventLog` subscriber, on the loop)."""
+        self._pending.append((self._events_key, encode(entry)))
+        self._wake.set()
 
     def publish(self, event: RunEvent) -> None:
         """Queue ``event`` (from the core's subscriber callback, on the loop)."""
@@ -304,7 +328,7 @@ async def serve_agent(
         return [Answer(key=keys.agent_skills(name), payload=encode(service.skills_reply()))]
 
     publisher = RunEventPublisher(mesh, name)
-    unsubscribe = core.subscribe(publisher.publish)
+    unsubscribe = publisher.attach(core)
     token = None
     try:
         async with anyio.create_task_group() as tg:
@@ -325,7 +349,7 @@ async def serve_agent(
             task_status.started()
     finally:
         unsubscribe()
-        publisher.flush()  # progress of runs preempted at shutdown (their results went at once)
+        publisher.flush()  # progress and log of runs preempted at shutdown (results went at once)
         with anyio.CancelScope(shield=True):
             if token is not None:
                 with anyio.move_on_after(unregister_timeout):

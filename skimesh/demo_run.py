@@ -28,8 +28,9 @@ from wm_store.protocol import Value
 
 from .demo_mission import run_mission, summary_lines
 from .demo_output import MissionView
-from .demo_stack import DemoError, StackOptions, demo_stack
+from .demo_stack import DemoError, StackOptions, background, demo_stack
 from .recording import CallText, MissionRecording, step_text
+from .recording_agents import record_agent_events
 
 __all__ = ["EXIT_NOT_REACHED", "EXIT_SETUP", "DemoSetup", "run_demo"]
 
@@ -114,16 +115,18 @@ async def run_demo(setup: DemoSetup, recorder: Recorder, stop: anyio.Event) -> i
             task_options = TaskOptions(
                 max_replans=setup.max_replans, planner_timeout=setup.planner_timeout
             )
-            result = await run_mission(
-                stack,
-                goal,
-                options=task_options,
-                view=view,
-                recording=recording,
-                stop=stop,
-                deadline=setup.deadline,
-                out=_print,
-            )
+            # the agents' event logs (agents/*/events) into the recording, for the mission
+            async with background(record_agent_events, stack.mesh, recording.agents):
+                result = await run_mission(
+                    stack,
+                    goal,
+                    options=task_options,
+                    view=view,
+                    recording=recording,
+                    stop=stop,
+                    deadline=setup.deadline,
+                    out=_print,
+                )
             for line in summary_lines(result, view, recording=str(setup.rrd)):
                 _print(line)
                 recording.note(line, level="INFO" if result.goal_reached else "WARN")

@@ -4,8 +4,9 @@ and progress, and every world-model change.
 The world's :class:`~device_drivers.recorder.Recorder` records the scene (geometry once, body
 poses and joints on the ``sim_time`` timeline); :class:`MissionRecording` logs into the *same*
 recording stream, so one ``.rrd`` holds everything. It lives at the application's edge: it
-only listens (task events handed to :meth:`task_event`, changes to :meth:`wm_change`) and
-never touches the world model's or the skills' code. Entities::
+only listens (task events handed to :meth:`task_event`, changes to :meth:`wm_change`, the
+agents' event-log entries to :meth:`agent_entry`) and never touches the world model's or the
+skills' code. Entities::
 
     task/events              TextLog: one line per task event (replans WARN, failures ERROR)
     task/plan                TextDocument (markdown): the plan's steps and partial order
@@ -13,6 +14,8 @@ never touches the world model's or the skills' code. Entities::
     robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
     robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
     world_model/changes      TextLog: one line per committed transaction (revision + summary)
+    agents/<agent>/events    TextLog: the agent's event log: runs started, results, refused
+                             starts, world-model writes (:mod:`skimesh.recording_agents`)
     demo/log                 TextLog: the demo's own lines (start-up, verification, summary)
 
 Each entry is on two timelines: ``sim_time`` (simulated seconds, the scene's timeline) and
@@ -27,7 +30,7 @@ from collections.abc import Callable, Iterable, Mapping
 
 import rerun as rr
 
-from skill_agent.protocol import ParamSpec
+from skill_agent.protocol import LogEntry, ParamSpec
 from skill_agent.skill import WorldView
 from task_agent.discovery_model import agents_from_view
 from task_agent.protocol import (
@@ -50,6 +53,8 @@ from wm_store.protocol import (
     TemplateDefined,
     Value,
 )
+
+from .recording_agents import AgentEventLines
 
 __all__ = ["CallText", "MissionRecording", "describe_change", "step_text"]
 
@@ -141,6 +146,14 @@ class MissionRecording:
         self.robots = dict(robots or {})
         self._t0 = time.monotonic()
         self._steps: dict[int, str] = {}
+        self.agents = AgentEventLines(
+            rec,
+            sim_clock=sim_clock,
+            wall_clock=lambda: time.monotonic() - self._t0,
+            label_of=label_of,
+            call_text=self.call_text,
+        )
+        """The agents' event-log lines (batched: :meth:`AgentEventLines.flush` sends them)."""
         for robot in sorted(set(self.robots.values())):
             rec.log(f"robots/{robot}/progress", rr.SeriesLines(names=["progress"]), static=True)
 
@@ -160,6 +173,10 @@ class MissionRecording:
         """One world-model change (call it from the client's change callback)."""
         self._now()
         self.rec.log("world_model/changes", rr.TextLog(describe_change(change, self.label_of)))
+
+    def agent_entry(self, entry: LogEntry) -> None:
+        """One entry of an agent's event log (buffered; progress is left out)."""
+        self.agents.add(entry)
 
     def task_event(self, event: TaskEvent) -> None:
         """One task event: the task log, the plan, the robot's skill timeline."""
@@ -237,4 +254,4 @@ class MissionRecording:
         """The entity paths this class writes (for checks)."""
         fixed = ["task/events", "task/plan", "world_model/changes", "demo/log"]
         per_robot = [f"robots/{r}/{k}" for r in self.robots.values() for k in ("skill", "progress")]
-        return [*fixed, *per_robot]
+        return [*fixed, *per_robot, *self.agents.entities()]

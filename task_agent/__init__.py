@@ -20,6 +20,7 @@ Execution, and the Zenoh-facing parts::
     discovery         live discovery: registrations + liveliness tokens
     execution_state   steps, their graph, data flow, the goal check (pure)
     runners           how a skill runs on an agent: over Zenoh, or in-process cores
+    run_writes        each run's world-model writes, from the agents' event logs
     steps             a step graph run on the agents: parallel, agent loss, operator fallback
     executor          one task: plan, run, check the goal, replan; abort
     service           the task agent: requests, registry, events (serve_tasks)
@@ -75,6 +76,7 @@ if TYPE_CHECKING:
     from .planner import Planner as Planner
     from .planner import PlanStats as PlanStats
     from .planner import PlanStep as PlanStep
+    from .run_writes import RunWrites as RunWrites
     from .runners import CoreRunner as CoreRunner
     from .runners import SkillRunner as SkillRunner
     from .runners import ZenohRunner as ZenohRunner
@@ -103,6 +105,7 @@ _LAZY = {
     "Executor": "executor",
     "OperatorDesk": "operator",
     "serve_operator": "operator",
+    "RunWrites": "run_writes",
     "CoreRunner": "runners",
     "SkillRunner": "runners",
     "ZenohRunner": "runners",
@@ -149,6 +152,7 @@ __all__ = [
     "PropertyGoal",
     "RelationGoal",
     "RemoteTaskError",
+    "RunWrites",
     "ScheduledStep",
     "SkillRunner",
     "TaskClient",

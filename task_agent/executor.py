@@ -59,6 +59,7 @@ from .protocol import (
     TaskOutcome,
     TaskStarted,
 )
+from .run_writes import RunWrites
 from .runners import SkillRunner
 from .steps import EventSink, StepOutcome, StepScheduler
 
@@ -97,6 +98,7 @@ class Executor:
         operator_agent: str = "operator",
         wm_timeout: float = 5.0,
         agent_wait: float = 5.0,
+        writes: RunWrites | None = None,
     ) -> None:
         self.task_id = task_id
         self.wm = wm
@@ -115,6 +117,7 @@ class Executor:
             wm=wm,
             options=self.options,
             operator_agent=operator_agent,
+            writes=writes,
         )
         self.goal = ""
         self.name = ""

@@ -1,8 +1,9 @@
 """The operator agent (semi-autonomy, FRIEND II): a skill agent whose skills a person answers.
 
 When a step fails and its call (``Call.fallback_operator``) or its task
-(``TaskOptions.operator_fallback``) allows it, the executor runs the same skill, with the
-parameters the failed run had, on this agent. The run is an ordinary skill run (pre-conditions
+(``TaskOptions.operator_fallback`` for every skill, ``operator_fallback_skills`` for some)
+allows it, the executor runs the same skill, with the parameters the failed run had, on this
+agent. The run is an ordinary skill run (pre-conditions
 checked, progress published, stop and time-out honoured); its ``execute`` opens a *pending
 request* and waits until a person answers it with ``skimesh operator``: success commits the
 skill's predicted effects to the world model (the person did the step), failure fails the run.
@@ -262,7 +263,7 @@ async def serve_operator(
         return [Answer(key=operator_rpc_key(keys), payload=data, ok=ok)]
 
     publisher = RunEventPublisher(mesh, name)
-    unsubscribe = core.subscribe(publisher.publish)
+    unsubscribe = publisher.attach(core)  # run progress and the event log
     token = None
     try:
         async with anyio.create_task_group() as tg:

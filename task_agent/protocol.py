@@ -147,6 +147,9 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
     """Run every skill in simulated-outcome mode."""
     operator_fallback: bool = False
     """When a skill fails, ask the operator before replanning."""
+    operator_fallback_skills: frozenset[str] = frozenset()
+    """Ask the operator only when one of these skills fails (by skill name, e.g. ``pick``);
+    the others are replanned. Ignored when ``operator_fallback`` is set (every skill)."""
 
 
 class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
@@ -257,6 +260,9 @@ class StepFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     reason: str
     message: str = ""
     by_operator: bool = False
+    wm_writes: list[int] = []
+    """World-model revisions the step's run (and its sub-runs) committed, from the agent's
+    event log; empty when the task agent does not follow the agents' logs."""
 
 
 class Replanning(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):

@@ -5,7 +5,9 @@ Keys (prefix ``skimesh/<mesh>``): ``tasks/rpc`` answers one
 :data:`~task_agent.protocol.TaskRequest` with one :data:`~task_agent.protocol.TaskReply`;
 ``tasks/<task>/events`` carries each task's events (congestion control BLOCK, ``seq`` 1, 2, ...).
 A client that wants every event of its task subscribes first and submits with its own
-``task_id``.
+``task_id``. The service follows every agent's event log (``agents/*/events``,
+:class:`~task_agent.run_writes.RunWrites`), so each ``StepFinished`` lists the world-model
+revisions its run wrote.
 
 Requests:
 
@@ -21,9 +23,10 @@ Requests:
   ``abort_wait`` seconds).
 
 Refusals are error replies carrying ``ErrorReply{code, message}``: ``bad_request``
-(undecodable, or a task id that is no key segment), ``task_exists``, ``unknown_task``,
-``goal_parse``, ``verification``, ``internal``. Nothing malformed crashes the service or changes
-its state. Nothing blocks the loop: planning solves in a worker thread (the planner's limiter).
+(undecodable, a task id that is no key segment, operator fallback for a skill no registered
+agent offers), ``task_exists``, ``unknown_task``, ``goal_parse``, ``verification``,
+``internal``. Nothing malformed crashes the service or changes its state. Nothing blocks the
+loop: planning solves in a worker thread (the planner's limiter).
 """
 
 from __future__ import annotations
@@ -72,6 +75,7 @@ from .protocol import (
 from .protocol import (
     TaskStatus as TaskStatusRequest,
 )
+from .run_writes import RunWrites
 from .runners import SkillRunner, ZenohRunner
 from .taskfile import load_task_file
 from .verify import verify
@@ -112,8 +116,11 @@ class TaskService:
         operator_agent: str = "operator",
         keep_finished: int = 256,
         abort_wait: float = 10.0,
+        writes: RunWrites | None = None,
     ) -> None:
         self.wm = wm
+        self.writes = writes
+        """The agents' event logs (steps then report their world-model writes), if followed."""
         self.discovery = discovery
         self.runner = runner
         self.publish = publish
@@ -201,12 +208,18 @@ class TaskService:
         task_id = check_name(task_id, "task id") if task_id else f"t-{uuid.uuid4().hex[:10]}"
         if task_id in self._tasks:
             raise RequestError("task_exists", f"task {task_id!r} exists; choose another id")
+        agents = self.discovery.agents(include_unavailable=True)
+        offered = sorted({s.name for a in agents for s in a.skills})
+        if unknown := ", ".join(sorted(options.operator_fallback_skills - set(offered))):
+            why = f"no registered agent offers {unknown} (skills: {', '.join(offered) or 'none'})"
+            raise RequestError("bad_request", f"operator fallback: {why}")
         return Executor(
             task_id=task_id,
             wm=self.wm,
             discovery=self.discovery,
             runner=self.runner,
             publish=self.publish,
+            writes=self.writes,
             options=options,
             planner=self.planners(options),
             operator_agent=self.operator_agent,
@@ -261,6 +274,7 @@ async def serve_tasks(
     ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped)."""
     keys = mesh.keys
     discovery = Discovery(wm)
+    writes = RunWrites()
 
     def publish(event: TaskEvent) -> None:
         try:
@@ -275,6 +289,7 @@ async def serve_tasks(
         publish=publish,
         planners=planners,
         operator_agent=operator or "",
+        writes=writes,
     )
 
     async def rpc(query: IncomingQuery) -> list[Answer]:
@@ -283,6 +298,7 @@ async def serve_tasks(
 
     async with anyio.create_task_group() as tg:
         await tg.start(discovery.watch, mesh)
+        await tg.start(writes.follow, mesh)  # agents/*/events: each step's world-model writes
         if operator:
             await tg.start(
                 functools.partial(serve_operator, mesh, wm, name=operator, discovery=discovery)

@@ -11,9 +11,15 @@ failure. A step whose agent's liveliness token disappears is stopped at once and
 reason ``agent_lost``. Cancelling :meth:`StepScheduler.run` (abort) stops every run: each ends
 ``preempted`` once the agent's ``on_preempt`` brought the robot to a safe state.
 
+With :class:`~task_agent.run_writes.RunWrites` (the agents' event logs), each
+``StepFinished`` lists the world-model revisions its run wrote (``wm_writes``: effects, a
+skill's own transactions, its sub-runs'), and :attr:`StepScheduler.effects_revision` covers
+them all.
+
 Semi-autonomy: a step that failed (not refused by a false pre-condition, not stopped by the
-scheduler) whose call allows it, or whose task does, is handed to the operator agent: the same
-skill with the parameters it ran with, plus ``operator_note`` saying what failed; a person
+scheduler) whose call allows it, or whose task does (``TaskOptions.operator_fallback`` for every
+skill, ``operator_fallback_skills`` for the skills named), is handed to the operator agent: the
+same skill with the parameters it ran with, plus ``operator_note`` saying what failed; a person
 answers it (:mod:`task_agent.operator`) and a success counts as the step's success.
 """
 
@@ -23,6 +29,7 @@ import math
 import time
 import uuid
 from collections.abc import Callable
+from contextlib import nullcontext
 from typing import Any, TypeVar, cast
 
 import anyio
@@ -43,6 +50,7 @@ from .execution_state import (
     resolve_params,
 )
 from .protocol import StepFinished, StepProgress, StepStarted, TaskEvent, TaskOptions
+from .run_writes import RunWrites
 from .runners import SkillRunner
 
 __all__ = ["EventSink", "StepOutcome", "StepScheduler"]
@@ -75,6 +83,7 @@ class StepOutcome(msgspec.Struct, kw_only=True):
     stopped: bool = False
     """Stopped by the scheduler (the failed branch), not a failure of its own."""
     params: dict[str, Value] = {}
+    wm_writes: list[int] = []
 
     def __str__(self) -> str:
         text = f"step {self.index} {self.skill} on {self.agent or '?'}"
@@ -100,8 +109,10 @@ class StepScheduler:
         wm: WorldModel,
         options: TaskOptions,
         operator_agent: str = "",
+        writes: RunWrites | None = None,
     ) -> None:
         self.events = events
+        self.writes = writes
         self.runner = runner
         self.discovery = discovery
         self.wm = wm
@@ -156,7 +167,11 @@ class StepScheduler:
         return next((n for n in names if n not in busy), names[0] if names else "")
 
     def _fallback_allowed(self, spec: StepSpec, outcome: StepOutcome) -> bool:
-        allowed = spec.fallback_operator or self.options.operator_fallback
+        allowed = (
+            spec.fallback_operator
+            or self.options.operator_fallback
+            or spec.skill in self.options.operator_fallback_skills
+        )
         return (
             allowed
             and not outcome.success
@@ -222,28 +237,38 @@ class StepScheduler:
                 results.append(event)
 
         running = self._running[spec.index] = _Running(agent, anyio.CancelScope())
-        try:
-            with running.scope:
-                try:
-                    results.append(
-                        await self.runner.run(
-                            agent, request, on_started=on_started, on_event=on_event
+        watch = self.writes.watch(agent, request.run_id) if self.writes else nullcontext()
+        with watch as watched:
+            try:
+                with running.scope:
+                    try:
+                        results.append(
+                            await self.runner.run(
+                                agent, request, on_started=on_started, on_event=on_event
+                            )
                         )
-                    )
-                except AgentTransportError as e:
-                    outcome.reason, outcome.message = "agent_lost", str(e)
-                except SkillError as e:
-                    reason = "precondition" if e.code == "precondition" else e.code
-                    outcome.reason, outcome.message = reason, str(e)
-        except anyio.get_cancelled_exc_class():  # abort: the run was stopped on the agent
-            self._from_result(outcome, results, "preempted", "the task was aborted")
-            self._finished(outcome, by_operator)
-            raise
-        finally:
-            self._running.pop(spec.index, None)
+                    except AgentTransportError as e:
+                        outcome.reason, outcome.message = "agent_lost", str(e)
+                    except SkillError as e:
+                        reason = "precondition" if e.code == "precondition" else e.code
+                        outcome.reason, outcome.message = reason, str(e)
+                if watched is not None and self.writes is not None:  # refused: nothing to wait
+                    writes = await self.writes.revisions(watched) if results else watched.revisions
+                    self._wrote(outcome, writes)
+            except anyio.get_cancelled_exc_class():  # abort: the run was stopped on the agent
+                self._from_result(outcome, results, "preempted", "the task was aborted")
+                self._wrote(outcome, watched.revisions if watched is not None else [])
+                self._finished(outcome, by_operator)
+                raise
+            finally:
+                self._running.pop(spec.index, None)
         reason, message, outcome.stopped = running.why or ("", "", False)
         self._from_result(outcome, results, reason, message)
         return self._finished(outcome, by_operator)
+
+    def _wrote(self, outcome: StepOutcome, revisions: list[int]) -> None:
+        outcome.wm_writes = list(revisions)
+        self.effects_revision = max(self.effects_revision, *revisions, 0)
 
     def _from_result(
         self, outcome: StepOutcome, results: list[RunResult], reason: str, message: str
@@ -269,6 +294,7 @@ class StepScheduler:
             reason=outcome.reason,
             message=outcome.message,
             by_operator=by_operator,
+            wm_writes=outcome.wm_writes,
         )
         return outcome
 

@@ -83,7 +83,7 @@ class SlowSteps:
     shorter than ``stall`` goes unseen (the heartbeat of :func:`meshlink.testing.watch_loop`
     sees those, on a quiet machine)."""
 
-    def __init__(self, cpu: float = 0.04, stall: float = 0.3) -> None:
+    def __init__(self, cpu: float = 0.04, stall: float = 1.0) -> None:
         self.cpu, self.stall = cpu, stall
         self.reports: list[str] = []
 

@@ -96,7 +96,13 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     submit.add_argument("--max-replans", type=int, default=3, metavar="N")
     submit.add_argument("--simulate", action="store_true", help="simulated outcomes for every run")
     submit.add_argument(
-        "--operator-fallback", action="store_true", help="ask the operator when a step fails"
+        "--operator-fallback",
+        nargs="?",
+        const="*",
+        default="",
+        metavar="SKILLS",
+        help="ask the operator when a step fails: any step, or only steps of SKILLS "
+        "(comma-separated skill names, e.g. pick,place)",
     )
     submit.add_argument("--detach", action="store_true", help="print the task id and return")
     submit.add_argument(
@@ -317,12 +323,14 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
 
 
 def _options(args: argparse.Namespace) -> TaskOptions:
+    fallback = frozenset(s.strip() for s in args.operator_fallback.split(","))
     return TaskOptions(
         engine=args.engine,
         planner_timeout=args.planner_timeout,
         max_replans=args.max_replans,
         simulate=args.simulate,
-        operator_fallback=args.operator_fallback,
+        operator_fallback="*" in fallback,
+        operator_fallback_skills=fallback - {"", "*"},
     )
 
 

@@ -36,7 +36,7 @@ async def test_watch_loop_and_blocking_detector_see_a_blocked_loop(
     busy, stalled = blocking_detector.reports
     assert " took " in busy and busy.endswith(" ms CPU)")
     assert int(busy.rsplit("(", 1)[1].split()[0]) >= 60
-    assert int(stalled.rsplit(" took ", 1)[1].split()[0]) >= 300
+    assert int(stalled.rsplit(" took ", 1)[1].split()[0]) >= 1000
 
 
 async def test_watch_loop_stays_quiet_on_a_free_loop() -> None:

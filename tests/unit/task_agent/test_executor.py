@@ -134,9 +134,9 @@ async def test_abort_preempts_every_run() -> None:
     async with fleet(time_scale=0.1) as f:
         executor = f.executor()
 
-        async def abort_soon() -> None:
-            await f.wait_for(StepStarted)
-            await anyio.sleep(0.02)
+        async def abort_soon() -> None:  # once both robots are driving
+            await f.wait_for(StepStarted, "r1")
+            await f.wait_for(StepStarted, "r2")
             executor.abort("operator pressed stop")
 
         async with anyio.create_task_group() as tg:

@@ -133,6 +133,37 @@ async def test_an_operator_failure_fails_the_step() -> None:
 
 
 @pytest.mark.anyio
+async def test_fallback_for_pick_only_hands_a_failing_pick_to_the_operator() -> None:
+    async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
+        goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
+        async with with_operator(f) as person:
+            executor = f.executor(operator_fallback_skills=["pick"], max_replans=0)
+            done = await executor.run_goal(goal)
+        assert done.outcome == "succeeded", done.message
+        assert len(person.seen) == 1 and not f.of(Replanning)
+        ends = [e for e in f.events if isinstance(e, StepFinished)]
+        assert [(e.agent, e.skill) for e in ends if e.by_operator] == [("operator", "pick")]
+
+
+@pytest.mark.anyio
+async def test_fallback_for_pick_only_replans_a_failing_navigate() -> None:
+    """r1 cannot drive; the operator may only pick: r1's navigate is replanned, onto r2."""
+    async with fleet(probabilities={"r1": {"navigate": 0.0}}) as f:
+        goal = parse_goal(f.tray_goal(0), f.wm)
+        async with with_operator(f) as person:
+            done = await f.executor(operator_fallback_skills=["pick"]).run_goal(goal)
+        assert done.outcome == "succeeded", done.message
+        ends = [e for e in f.events if isinstance(e, StepFinished)]
+        assert [(e.agent, e.skill) for e in ends if not e.success] == [("r1", "navigate")]
+        assert not person.seen and not any(e.by_operator for e in ends)
+        (replan,) = f.of(Replanning)
+        assert (
+            isinstance(replan, Replanning) and "navigate on r1 failed (execution)" in replan.reason
+        )
+        assert {e.agent for e in ends if e.success} == {"r2"}
+
+
+@pytest.mark.anyio
 async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
     async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
         params: dict[str, Value] = {"object": f.parts[0], "location": f.stations[0]}

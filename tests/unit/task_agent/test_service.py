@@ -24,6 +24,7 @@ from task_agent.protocol import (
     SubmitGoal,
     TaskAccepted,
     TaskFinished,
+    TaskOptions,
     TaskReply,
     TaskRequest,
     TasksReply,
@@ -113,7 +114,25 @@ async def test_refusals_carry_codes() -> None:
         await refused(tasks, AbortTask(task_id="nope"), "unknown_task", "no task 'nope'")
         await refused(tasks, b"\xc1", "bad_request", "undecodable")
         await refused(tasks, SubmitFile(text="[root"), "verification", "invalid TOML")
+        typo = TaskOptions(operator_fallback_skills=frozenset({"pick", "pik"}))
+        why = "operator fallback: no registered agent offers pik (skills: navigate, pick,"
+        await refused(tasks, SubmitGoal(goal="contain(KitBox-1, Gear-1)", options=typo),
+                      "bad_request", why)  # fmt: skip
         assert tasks.tasks() == []
+
+
+class OldTaskOptions(msgspec.Struct, frozen=True, kw_only=True):
+    """``TaskOptions`` before ``operator_fallback_skills``."""
+
+    operator_fallback: bool = False
+
+
+def test_operator_fallback_skills_keep_the_wire_compatible() -> None:
+    new = TaskOptions(operator_fallback_skills=frozenset({"pick"}))
+    assert msgspec.msgpack.decode(encode(new), type=OldTaskOptions) == OldTaskOptions()
+    old = msgspec.msgpack.decode(encode(OldTaskOptions(operator_fallback=True)), type=TaskOptions)
+    assert old == TaskOptions(operator_fallback=True)
+    assert msgspec.json.decode(b'{"operator_fallback_skills": ["pick"]}', type=TaskOptions) == new
 
 
 @pytest.mark.anyio
