@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable
 from typing import Any
 
+from .numeric_index import RANGE_OPS
 from .ontology import Ontology
 from .protocol import Element, Pose, Position, PropertyFilter, Query, Relation, Value
-from .state import SceneState, parse_id
+from .state import SceneState
 
 __all__ = ["id_sort_key", "match_relations", "resolve"]
 
@@ -24,9 +25,11 @@ SELF = "?"
 
 
 def id_sort_key(element_id: str) -> tuple[str, int, str]:
-    """Natural order of ids: ``Part-2`` before ``Part-10``."""
-    parsed = parse_id(element_id)
-    return (parsed[0], parsed[1], "") if parsed else (element_id, 0, element_id)
+    """Natural order of ids: ``Part-2`` before ``Part-10`` (ids split as by ``parse_id``)."""
+    head, sep, tail = element_id.rpartition("-")
+    if sep and head and tail.isdigit():
+        return (head, int(tail), "")
+    return (element_id, 0, element_id)
 
 
 def resolve(state: SceneState, ontology: Ontology, query: Query, limit: int = 0) -> list[Element]:
@@ -35,33 +38,37 @@ def resolve(state: SceneState, ontology: Ontology, query: Query, limit: int = 0)
     Raises :class:`~wm_store.errors.UnknownClassError` / ``UnknownRelationError`` for names the
     ontology does not know, so a misspelt query fails instead of matching nothing.
     """
-    candidates: set[str] | None = None
+    candidates: Collection[str] | None = None
     if query.label:
         candidates = state.ids_with_label(query.label)
     for rel in query.related:
         ontology.relation(rel.predicate)
         found = _ids_related(state, ontology, rel)
-        candidates = found if candidates is None else candidates & found
+        candidates = found if candidates is None else found.intersection(candidates)
+    types: Collection[str] = ()
     if query.type:
         cls = ontology.check_class(query.type)
         types = (cls,) if query.exact_type else ontology.subclasses(cls)
-        if candidates is None:
-            candidates = state.ids_of_types(types)
-        else:
-            typeset = set(types)
-            candidates = {i for i in candidates if state.elements[i].type in typeset}
-    if candidates is None:
-        candidates = set(state.elements)
-    checks = [_compile_filter(f) for f in query.filters]
     for f in query.filters:
         ontology.data_property(f.property)
+    filters = list(query.filters)
     elements = state.elements
-    if not checks:
-        matches = [elements[i] for i in candidates]
-    elif len(checks) == 1:
-        check = checks[0]
+    if candidates is None:
+        types = types or state.types()
+        candidates = _from_range_index(state, types, filters)
+        if candidates is None:
+            candidates = state.ids_of_types(types)
+    elif query.type:
+        typeset = set(types)
+        candidates = [i for i in candidates if elements[i].type in typeset]
+    if not filters:
+        ordered = sorted(candidates, key=id_sort_key)
+        return [elements[i] for i in (ordered[:limit] if limit else ordered)]
+    if len(filters) == 1:
+        check = _compile_filter(filters[0])
         matches = [e for e in map(elements.__getitem__, candidates) if check(e)]
     else:
+        checks = [_compile_filter(f) for f in sorted(filters, key=lambda f: _COST[f.op])]
         matches = []
         for element_id in candidates:
             element = elements[element_id]
@@ -72,6 +79,24 @@ def resolve(state: SceneState, ontology: Ontology, query: Query, limit: int = 0)
                 matches.append(element)
     matches.sort(key=lambda e: id_sort_key(e.id))
     return matches[:limit] if limit else matches
+
+
+def _from_range_index(
+    state: SceneState, types: Collection[str], filters: list[PropertyFilter]
+) -> list[str] | None:
+    """Members of ``types`` selected through :attr:`SceneState.numeric` by the most selective
+    numeric range filter, which is then removed from ``filters``; ``None`` if there is none."""
+    best: list[str] | None = None
+    used = -1
+    for n, f in enumerate(filters):
+        want = f.value
+        if f.op in RANGE_OPS and isinstance(want, int | float) and not isinstance(want, bool):
+            found = state.numeric.select(types, f.property, f.op, float(want))
+            if best is None or len(found) < len(best):
+                best, used = found, n
+    if best is not None:
+        del filters[used]
+    return best
 
 
 def _ids_related(state: SceneState, ontology: Ontology, rel: Relation) -> set[str]:
@@ -107,6 +132,9 @@ def match_relations(
     rels.sort(key=lambda r: (id_sort_key(r.subject), r.predicate, id_sort_key(r.object)))
     return rels
 
+
+_COST = {"exists": 0, "eq": 1, "ne": 1, "lt": 2, "le": 2, "gt": 2, "ge": 2, "near": 3}
+"""Relative cost of a filter check: cheaper checks run first (the result is the same)."""
 
 _ORDER: dict[str, Callable[[Any, Any], bool]] = {
     "lt": operator.lt,

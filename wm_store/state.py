@@ -8,17 +8,20 @@ Every mutation returns an :data:`Undo` record; applying the undo records of a ch
 order restores the state before it. The store keeps them to serve snapshots at past revisions
 and to roll back a transaction that fails half-way.
 
-Indexes: by id, by type, by label, relations by subject and by object, and the spatial parent of
-each element. All lookups are dict/set operations; nothing here walks the graph.
+Indexes: by id, by type, by label, relations by subject and by object, the spatial parent of
+each element, and sorted numeric property values per type (:mod:`wm_store.numeric_index`,
+built on first use). All lookups are dict/set operations or bisections; nothing here walks the
+graph. Elements are replaced, never mutated in place.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from typing import TypeAlias
 
 import msgspec
 
+from .numeric_index import NumericIndexes
 from .protocol import (
     ClassDef,
     ClassDefined,
@@ -83,6 +86,7 @@ class SceneState:
         self._in: dict[str, dict[str, set[str]]] = {}
         self._parent: dict[str, Relation] = {}
         self._relation_count = 0
+        self.numeric = NumericIndexes(self.elements, self._by_type)
 
     # ------------------------------------------------------------------ reads
 
@@ -95,6 +99,10 @@ class SceneState:
     @property
     def relation_count(self) -> int:
         return self._relation_count
+
+    def types(self) -> Collection[str]:
+        """The asserted types that have at least one element."""
+        return self._by_type.keys()
 
     def ids_of_types(self, types: Iterable[str]) -> set[str]:
         out: set[str] = set()
@@ -222,6 +230,7 @@ class SceneState:
                 self._discard(self._by_type, previous.type, element.id)
             if previous.label != element.label:
                 self._discard(self._by_label, previous.label, element.id)
+        self.numeric.element_put(previous, element)
         self.elements[element.id] = element
         self._by_type.setdefault(element.type, set()).add(element.id)
         if element.label:
@@ -242,6 +251,7 @@ class SceneState:
             return
         for rel in self.relations_of(element_id):
             self.remove_relation(rel)
+        self.numeric.element_dropped(element)
         self._discard(self._by_type, element.type, element_id)
         if element.label:
             self._discard(self._by_label, element.label, element_id)
