@@ -10,6 +10,10 @@
   If the tracker loses the path, a full DLS solve takes over for that tick; if that fails too,
   the arm halts at that tick and the motion fails with :class:`UnreachableError`. Without
   ``straight``: a joint move to the IK solution the driver computed (``MoveTcp.final``).
+- Every joint move is routed first (:class:`~device_drivers.joint_route.JointRouter`): its
+  straight joint path is checked for collisions of the arm with itself and the robot's base;
+  if it collides, another IK solution of the tool target or a detour through the rest posture
+  (one segment after the other), else :class:`CollisionError` before anything moves.
 - Completion: set-points at the target, then the joints within 0.01 rad and slow; otherwise
   :class:`MotionTimeoutError` 2 s (simulated) after the trajectory's end.
 - A motion started while the gripper holds something fails with :class:`GraspLostError` as
@@ -34,10 +38,16 @@ from device_drivers.errors import (
     MotionTimeoutError,
     UnreachableError,
 )
-from device_drivers.ik import IKOptions, TcpTarget
-from device_drivers.ik_dls import DlsIK
 from device_drivers.interfaces import ArmState
-from device_drivers.motion_math import PEAK_SPEED, minjerk, pose_of, quat_angle, quat_wxyz
+from device_drivers.joint_route import JointRouter, TimedRoute
+from device_drivers.motion_math import (
+    PEAK_SPEED,
+    minjerk,
+    pose_of,
+    quat_angle,
+    quat_wxyz,
+    tcp_target,
+)
 from device_drivers.protocol import MoveJoints, MoveTcp
 from device_drivers.robot_spec import RobotSpec, robot_layout
 from device_drivers.tcp_tracker import TcpTracker
@@ -80,35 +90,39 @@ class ArmController(Controller):
         self.site = model.site(layout.tcp_site).id
         self.gripper, self.base = gripper, base
         self.tracker = TcpTracker(spec)
-        self.fallback = DlsIK.for_robot(spec, IKOptions(restarts=0, max_iterations=30))
+        rest = spec.mjcf.home if spec.mjcf is not None else [0.0] * len(self.joints)
+        self.router = JointRouter(self.tracker.model, layout, rest, label=label)
+        self.fallback = self.router.ik  # on the tracker's model too: one private robot model
         self.timestep = float(model.opt.timestep)
         self.plan: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ start
     def begin(self, job: Job, t: float) -> None:
-        cmd = job.command
-        q0 = self.d.ctrl[self.acts].copy()
+        cmd, n = job.command, self.tracker.n_base
+        q0 = np.concatenate([self.d.ctrl[self.base.acts], self.d.ctrl[self.acts]])
+        q1, duration, goal = q0.copy(), None, None
         if isinstance(cmd, MoveJoints):
-            q1 = q0.copy()
             for name, value in cmd.target.items():
-                q1[self._index(name)] = value
-            self._check_limits(q1)
-            self._joint_plan(q0, q1, cmd.duration, base=None)
-        elif isinstance(cmd, MoveTcp):
-            if cmd.whole_body and (self.base.job is not None or self.base.owner):
-                raise DeviceBusyError(f"{self.base.label} is busy; whole-body motion needs it")
-            if cmd.straight:
-                self._line_plan(cmd)
-            else:
-                final = [cmd.final.get(j, q) for j, q in zip(self.joints, q0, strict=True)]
-                base = None
-                if cmd.whole_body:
-                    base = np.array([cmd.final.get(j, 0.0) for j in self.base.joints])
-                self._joint_plan(q0, np.array(final), None, base=base)
-            if cmd.whole_body:
-                self.base.owner = self.label
-        else:
+                q1[n + self._index(name)] = value
+            self._check_limits(q1[n:])
+            duration = cmd.duration
+        elif not isinstance(cmd, MoveTcp):
             raise CommandError(f"{self.label} (an arm) cannot {type(cmd).__name__}")
+        elif cmd.whole_body and (self.base.job is not None or self.base.owner):
+            raise DeviceBusyError(f"{self.base.label} is busy; whole-body motion needs it")
+        elif not cmd.straight:  # to the driver's IK solution, or another (see JointRouter)
+            first = 0 if cmd.whole_body else n
+            chain = zip(self.tracker.chain[first:], q1[first:], strict=True)
+            q1[first:] = [cmd.final.get(j, q) for j, q in chain]
+            goal = tcp_target(cmd.target)
+        whole = isinstance(cmd, MoveTcp) and cmd.whole_body
+        if isinstance(cmd, MoveTcp) and cmd.straight:
+            self._line_plan(cmd)
+        else:
+            path = TimedRoute(q0, self.router.route(q0, q1, goal), duration, _JOINT_SPEED)
+            self.plan = {"kind": "joints", "path": path, "T": path.period, "whole_body": whole}
+        if whole:
+            self.base.owner = self.label
         self.plan["holding"] = self.gripper.holding
 
     def _index(self, name: str) -> int:
@@ -126,16 +140,6 @@ class ArmController(Controller):
                     f"{self.label}: {name} = {value:.3f} rad is outside its limits "
                     f"[{lo:.2f}, {hi:.2f}]"
                 )
-
-    def _joint_plan(
-        self, q0: Any, q1: Any, duration: float | None, base: np.ndarray[Any, Any] | None
-    ) -> None:
-        spans = [float(np.max(np.abs(q1 - q0)))]
-        b0 = self.d.ctrl[self.base.acts].copy()
-        if base is not None:
-            spans.append(float(np.max(np.abs(base - b0))))
-        period = duration or max(0.4, PEAK_SPEED * max(spans) / _JOINT_SPEED)
-        self.plan = {"kind": "joints", "q0": q0, "q1": q1, "T": period, "b0": b0, "b1": base}
 
     def _line_plan(self, cmd: MoveTcp) -> None:
         q = np.concatenate([self.d.ctrl[self.base.acts], self.d.ctrl[self.acts]])
@@ -161,10 +165,10 @@ class ArmController(Controller):
         s = (t - self.started_at) / plan["T"]
         job.progress = 0.95 * min(s, 1.0)
         if plan["kind"] == "joints":
-            f = minjerk(s)
-            self.d.ctrl[self.acts] = plan["q0"] + f * (plan["q1"] - plan["q0"])
-            if plan["b1"] is not None:
-                self.d.ctrl[self.base.acts] = plan["b0"] + f * (plan["b1"] - plan["b0"])
+            q = plan["path"].at(t - self.started_at)
+            self.d.ctrl[self.acts] = q[self.tracker.n_base :]
+            if plan["whole_body"]:
+                self.d.ctrl[self.base.acts] = q[: self.tracker.n_base]
         elif plan["q1"] is None:
             self._line(plan, t)
         if s < 1.0:
@@ -245,13 +249,9 @@ class ArmController(Controller):
     def _full_solve(self, q: Any, pos: Any, rot: Any, whole: bool) -> Any:
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, rot.ravel())
-        w, x, y, z = (float(v) for v in quat)
-        target = TcpTarget(
-            position=(float(pos[0]), float(pos[1]), float(pos[2])), quat=(w, x, y, z)
-        )
         q0 = dict(zip(self.tracker.chain, q, strict=True))
         try:
-            result = self.fallback.solve(q0, target, whole_body=whole)
+            result = self.fallback.solve(q0, tcp_target(pose_of(pos, quat)), whole_body=whole)
         except UnreachableError as exc:
             raise UnreachableError(
                 position_error=exc.position_error,

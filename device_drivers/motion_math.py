@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from device_drivers.ik import TcpTarget
 from device_drivers.interfaces import WorldPose
 from device_drivers.placement import Footprint
 
@@ -31,6 +32,7 @@ __all__ = [
     "rect_corners",
     "rects_overlap",
     "slerp",
+    "tcp_target",
     "tool_down",
     "wrap",
 ]
@@ -106,6 +108,12 @@ def pose_of(pos: Sequence[float] | Array, quat_wxyz_: Sequence[float] | Array) -
     """A :class:`WorldPose` from a position and a MuJoCo (w, x, y, z) quaternion."""
     w, x, y, z = (float(v) for v in quat_wxyz_)
     return WorldPose(float(pos[0]), float(pos[1]), float(pos[2]), x, y, z, w)
+
+
+def tcp_target(pose: WorldPose) -> TcpTarget:
+    """The IK target of a tool pose (position and full orientation)."""
+    w, x, y, z = (float(v) for v in quat_wxyz(pose))
+    return TcpTarget(position=(pose.x, pose.y, pose.z), quat=(w, x, y, z))
 
 
 def tool_down(x: float, y: float, z: float, yaw: float = 0.0) -> WorldPose:

@@ -55,6 +55,11 @@ class TcpTracker:
         self._weights_wb = np.ones(len(self.chain))
         self._weights_wb[: self.n_base] = _BASE_WEIGHT
 
+    @property
+    def model(self) -> Any:
+        """The private compiled model of the robot alone (read it; never step it)."""
+        return self._model
+
     def fk(self, q: Array) -> tuple[Array, Array]:
         """Tool position and rotation matrix at chain configuration ``q`` (copies)."""
         pos, rot = self._kinematics(q)

@@ -55,7 +55,10 @@ async def move_to(
     timeout: float | None = None,
 ) -> None:
     """Bring the tcp to ``target`` by a joint-space motion (the path of the tool is not a
-    line; use it in free space)."""
+    line; use it in free space). The arm driver checks the joint path against the robot
+    itself (arm, base, deck) and, if it collides, takes another IK solution of ``target`` or
+    a detour through the arm's home posture;
+    :class:`~device_drivers.errors.CollisionError` when none is free."""
     await supervise(
         arm,
         f"{arm.name}: move to {_text(target)}",

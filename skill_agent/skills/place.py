@@ -7,8 +7,8 @@ floor (:func:`~skill_agent.primitives.free_spots`, away from what the world mode
 already there), carries the object through the arm's home posture, computes where the tcp
 must go for the object's bottom to be ``drop`` m above a spot
 (:func:`~skill_agent.primitives.release_pose`, from the grasp the object was picked with),
-approaches (the next spot if one is out of reach), releases (opening just wider than the
-object) and retreats. An arm
+approaches (the next spot if one is out of reach, or if the arm has no collision-free joint
+move to it), releases (opening just wider than the object) and retreats. An arm
 that cannot reach all the way down (a kit box low behind its shoulder) releases where it
 stopped if the object is already below the target's rim, straight above the spot.
 
@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from device_drivers.errors import DeviceError, GraspLostError, UnreachableError
+from device_drivers.errors import CollisionError, DeviceError, GraspLostError, UnreachableError
 from device_drivers.interfaces import WorldPose
 from wm_store.client import WmClient
 from wm_store.protocol import Op
@@ -205,7 +205,7 @@ class Place(Skill):
                 end=0.7,
             )
             return ""
-        except UnreachableError as exc:  # the arm could not go all the way
+        except (UnreachableError, CollisionError) as exc:  # the arm could not go all the way
             tcp = (await arm.state()).tcp
             bottom = to_transform(tcp).compose(object_in_tcp).translation[2] - height / 2
             if bottom < rim + RIM_SLACK and math.hypot(tcp.x - goal.x, tcp.y - goal.y) < 0.01:

@@ -114,3 +114,22 @@ async def test_navigate_and_pick_a_bolt_with_both_pads(ur5e: Sim) -> None:
     bolt, hand = sim.world.body_pose("Bolt-1"), sim.world.body_pose("r2/gripper/base")
     assert hand.z - bolt.z > 0.1  # carried up, below the hand
     assert sim.wm.query_relation(sim["r2-gripper"], Rel.contain, sim["Bolt-1"])
+
+
+async def test_pick_then_place_into_its_own_kit_box(ur5e: Sim) -> None:
+    """The kit box lies low behind the UR5e's pedestal: the IK's first solution is a folded,
+    wrist-flipped posture whose straight joint path runs the hand into the upper arm; the
+    driver's path check picks a collision-free solution instead, and the place succeeds."""
+    sim = ur5e
+    async with sim.agent("r2", *KITTING, sensors=("Camera-1",)) as r2:
+        for skill, params in (
+            ("navigate", {"goal": sim["Station-2"]}),
+            ("pick", {"object": sim["Bolt-1"]}),
+            ("place", {"object": sim["Bolt-1"], "container": sim["KitBox-2"]}),
+        ):
+            result = await run(r2, skill, **params)
+            assert result.success, f"{skill}: {result.message}"
+    assert sim.wm.query_relation(sim["KitBox-2"], Rel.contain, sim["Bolt-1"])
+    await sim.world.sleep(0.5)
+    assert sim.world.object_in("Bolt-1", "KitBox-2"), "the ground truth agrees"
+    assert "Bolt-1" not in sim.world.snapshot.attached

@@ -1,5 +1,6 @@
-"""The simulated arm: joint moves, straight tool lines, whole-body reach, refusals, stop and
-cancellation bring it to a halt that holds."""
+"""The simulated arm: joint moves, straight tool lines, whole-body reach, refusals, joint moves
+routed around the robot's own base (or refused before they move), stop and cancellation bring
+it to a halt that holds."""
 
 from __future__ import annotations
 
@@ -19,12 +20,13 @@ from device_drivers.arm_control import ArmController
 from device_drivers.control import Job
 from device_drivers.drivers import SimArm, SimBase, sim_devices
 from device_drivers.errors import (
+    CollisionError,
     CommandError,
     DeviceBusyError,
     MotionStoppedError,
     UnreachableError,
 )
-from device_drivers.interfaces import Arm
+from device_drivers.interfaces import Arm, ArmState
 from device_drivers.motion_math import tool_down
 from device_drivers.plant import Plant
 from device_drivers.protocol import MoveTcp
@@ -123,6 +125,31 @@ async def test_bad_commands_are_refused(world: SimWorld) -> None:
         await arm.move_joints({"elbw": 1.0})
     with pytest.raises(CommandError, match="outside its limits"):
         await arm.move_joints({"elbow": 4.0})
+
+
+async def test_a_joint_move_through_its_own_base_detours_or_is_refused(world: SimWorld) -> None:
+    """From beside the base to the other side, the straight joint path would swing the arm
+    through the base: the move goes through the rest posture (arm up) instead. A move that
+    would end inside the base is refused with CollisionError before anything moves."""
+    arm = arm_of(world)
+    left = {"shoulder_pan": -1.5, "shoulder_lift": -1.4, "elbow": -1.8, "wrist_pitch": 1.0}
+    await arm.move_joints(left)
+    lifts: list[float] = []
+
+    def seen(_: float) -> None:
+        state = world.snapshot.states[("r1", "arm")]
+        assert isinstance(state, ArmState)
+        lifts.append(state.joints["shoulder_lift"])
+
+    await arm.move_joints({**left, "shoulder_pan": 1.5}, progress=seen)
+    state = await arm.state()
+    assert state.joints["shoulder_pan"] == pytest.approx(1.5, abs=0.01)
+    assert min(abs(v) for v in lifts) < 0.2, "it passed the rest posture"
+    t0 = world.snapshot.time
+    with pytest.raises(CollisionError, match=r"r1-arm: no collision-free joint move.*r1/base"):
+        await arm.move_joints({"shoulder_pan": 0.0, "shoulder_lift": -2.2, "elbow": 0.0})
+    assert world.snapshot.time - t0 < 0.1
+    assert (await arm.state()).joints == pytest.approx(state.joints, abs=2e-3)
 
 
 async def test_a_second_motion_is_refused_while_one_runs(world: SimWorld) -> None:
