@@ -205,6 +205,33 @@ async def test_fast_runs_keep_the_batch_semantics() -> None:
     assert runs[1][1] < lockstep[1][1] / 2  # far fewer hand-overs
 
 
+async def test_an_alarm_due_at_the_end_of_a_batch_rides_on_its_report() -> None:
+    """An alarm first due at the last tick of a batch is rung by the batch's own report: one
+    snapshot handed over for that tick, not two; the woken task sees that tick and the
+    command it sends starts at the next batch boundary, that very tick."""
+    scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
+    world = await SimWorld.create(scenario, FAST)
+    posted: list[float] = []
+    report = world._report
+
+    def counting(finished: list[Any], snapshot: Any) -> None:
+        posted.append(snapshot.time)
+        report(finished, snapshot)
+
+    world._report = counting  # type: ignore[method-assign]
+    arm = sim_devices(world, "friend")[("friend", "arm")]
+    assert isinstance(arm, SimArm)
+    async with anyio.create_task_group() as tg:
+        await tg.start(world.run)
+        await world.wait_time(1.0 - 1e-6)  # batches of 10 ticks from 0: tick 100 ends one
+        woken = world.snapshot.time
+        await arm.move_joints({"elbow": 1.2}, duration=0.2)
+        started = world.plant.controllers[("friend", "arm")].started_at
+        tg.cancel_scope.cancel()
+    assert abs(woken - 1.0) < 1e-9 and started == woken
+    assert [t for t in posted if abs(t - 1.0) < 1e-9] == [woken]
+
+
 async def test_a_call_runs_at_the_next_batch_boundary() -> None:
     """A fast run returns at the next batch boundary when call() waits, not after its wall
     budget (worth up to a second of simulated time here)."""
