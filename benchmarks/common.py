@@ -343,6 +343,25 @@ async def stdin_lines() -> AsyncIterator[str]:
             yield line
 
 
+def start_router_child(module: str, stack: contextlib.ExitStack, attempts: int = 5) -> str:
+    """Start ``python -m module --role router`` on a free loopback port (stopped, by its PID,
+    when ``stack`` closes) and return its endpoint; a port taken meanwhile is tried again."""
+    from meshlink.testing import free_port
+
+    for attempt in range(attempts):
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        child = Child(["-m", module, "--role", "router", "--listen", endpoint], name="router")
+        stack.callback(child.stop)
+        try:
+            child.expect("ready", timeout=30)
+        except RuntimeError:
+            if attempt == attempts - 1:
+                raise
+            continue
+        return endpoint
+    raise AssertionError("unreachable")
+
+
 def child_router(args: argparse.Namespace) -> int:
     """A benchmark's router child (``--role router --listen ENDPOINT``): a Zenoh router until
     its stdin closes; prints ``{"ready": endpoint}`` once it listens."""

@@ -48,12 +48,12 @@ from benchmarks.common import (
     format_table,
     load_average,
     machine_info,
+    start_router_child,
     stdin_lines,
     summarize,
 )
 from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, to_zenoh_config
 from meshlink.bridge import call0, undeclare
-from meshlink.testing import free_port
 from skill_agent.client import AgentClient
 from skill_agent.config import load_config
 from skill_agent.protocol import Progress, RunEvent
@@ -323,21 +323,8 @@ def _terminate(signum: int, _frame: object) -> None:
     raise SystemExit(128 + signum)  # unwinds the ExitStack: children stopped by PID
 
 
-def start_router(stack: contextlib.ExitStack, attempts: int = 5) -> str:
-    for attempt in range(attempts):
-        endpoint = f"tcp/127.0.0.1:{free_port()}"
-        child = Child(
-            ["-m", "benchmarks.skills", "--role", "router", "--listen", endpoint], name="router"
-        )
-        stack.callback(child.stop)
-        try:
-            child.expect("ready", timeout=30)
-        except RuntimeError:
-            if attempt == attempts - 1:
-                raise
-            continue
-        return endpoint
-    raise AssertionError("unreachable")
+def start_router(stack: contextlib.ExitStack) -> str:
+    return start_router_child("benchmarks.skills", stack)
 
 
 def run(plan: Plan, json_path: Path | None) -> int:
