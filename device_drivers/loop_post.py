@@ -20,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import ctypes
+import functools
 import os
 from collections import deque
 from collections.abc import Callable
@@ -27,18 +28,13 @@ from typing import Any
 
 __all__ = ["LoopPost", "loop_post"]
 
-_WRITE: Any = None
-
-
+@functools.cache
 def _write() -> Any:
-    """libc's ``write`` called with the GIL held (ctypes.PyDLL), built on first use."""
-    global _WRITE
-    if _WRITE is None:
-        write = ctypes.PyDLL(None).write
-        write.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_size_t)
-        write.restype = ctypes.c_ssize_t
-        _WRITE = write
-    return _WRITE
+    """libc's ``write`` called with the GIL held (ctypes.PyDLL), built once (it is immutable)."""
+    write = ctypes.PyDLL(None).write
+    write.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_size_t)
+    write.restype = ctypes.c_ssize_t
+    return write
 
 
 class LoopPost:
