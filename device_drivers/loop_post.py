@@ -28,6 +28,7 @@ from typing import Any
 
 __all__ = ["LoopPost", "loop_post"]
 
+
 @functools.cache
 def _write() -> Any:
     """libc's ``write`` called with the GIL held (ctypes.PyDLL), built once (it is immutable)."""

@@ -18,7 +18,7 @@ from wm_store.errors import WmError
 from .commands import agent, demo, router, sim, task, wm
 from .runtime import configure_logging
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "describe_error", "main"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,6 +52,15 @@ USER_ERRORS: tuple[type[Exception], ...] = (
 )
 
 
+def describe_error(error: BaseException) -> str:
+    """One line for a user: the message, or the kind of error where it has none (a bare
+    ``TimeoutError`` says nothing by itself)."""
+    text = str(error)
+    if isinstance(error, TimeoutError) and not text:
+        return "timed out (no answer in time; is the router reachable and the service running?)"
+    return text or type(error).__name__
+
+
 def _leaves(error: BaseException) -> list[BaseException]:
     if isinstance(error, BaseExceptionGroup):
         return [leaf for e in error.exceptions for leaf in _leaves(e)]
@@ -71,7 +80,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not all(isinstance(leaf, USER_ERRORS) for leaf in leaves):
             raise
         for leaf in leaves:
-            print(f"skimesh {args.command}: {leaf}", file=sys.stderr)
+            print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
         return 2
 
 

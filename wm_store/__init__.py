@@ -19,6 +19,7 @@ from .errors import CardinalityError as CardinalityError
 from .errors import ConflictError as ConflictError
 from .errors import ElementNotFoundError as ElementNotFoundError
 from .errors import OntologyError as OntologyError
+from .errors import RevisionTimeoutError as RevisionTimeoutError
 from .errors import TransportError as TransportError
 from .errors import ValidationError as ValidationError
 from .errors import WmError as WmError
@@ -51,6 +52,7 @@ __all__ = [
     "PropertyFilter",
     "Query",
     "Relation",
+    "RevisionTimeoutError",
     "RobotRegistration",
     "SkillSpec",
     "StoreConfig",

@@ -345,11 +345,12 @@ class WmClient:
         subclasses = {name: onto.subclasses(name) for name in ("Agent", "Robot", "Skill")}
         for _attempt in range(_REGISTER_ATTEMPTS):
             state = self.replica.state
+            made_at = state.revision  # the state changes in place as the replica catches up
             ops = registration_ops(state, registration, subclasses=subclasses)
             try:
-                reply = await self.transact(ops, expect_revision=state.revision)
+                reply = await self.transact(ops, expect_revision=made_at)
             except ConflictError:  # the store moved on: catch up with it, then look again
-                await self.replica.wait_for_revision(state.revision + 1)
+                await self.replica.wait_for_revision(made_at + 1)
                 continue
             return {k: v for k, v in reply.ids.items() if k.startswith("$")}
         raise ConflictError(

@@ -22,6 +22,8 @@ Hierarchy::
     ├── StorageError                   the durable log or a snapshot cannot be read or written
     │   └── CorruptLogError            a record in the middle of the log fails its CRC
     ├── TransportError                 the store cannot be reached (no reply, timeout, closed)
+    │   └── RevisionTimeoutError       a revision did not reach this replica in time (also a
+    │                                  ``TimeoutError``)
     └── RemoteError                    the store answered with an error (keeps its code)
 
 Each error has a stable ``code`` (used on the wire in :class:`wm_store.protocol.ErrorReply`), and
@@ -42,6 +44,7 @@ __all__ = [
     "ProtocolError",
     "RelationDomainError",
     "RemoteError",
+    "RevisionTimeoutError",
     "StorageError",
     "TransportError",
     "TreeShapeError",
@@ -131,6 +134,14 @@ class CorruptLogError(StorageError):
 
 class TransportError(WmError):
     code = "transport_error"
+
+
+class RevisionTimeoutError(TransportError, TimeoutError):
+    """A revision the caller waits for did not reach the local replica in time: the store's
+    change stream and its ``changes-since`` answers are too slow or cut off. Also a
+    ``TimeoutError``, so ``except TimeoutError`` still catches it."""
+
+    code = "revision_timeout"
 
 
 class RemoteError(WmError):

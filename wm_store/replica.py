@@ -23,7 +23,7 @@ import msgspec
 from anyio.abc import TaskStatus
 from anyio.streams.memory import MemoryObjectSendStream
 
-from .errors import HistoryCompactedError
+from .errors import HistoryCompactedError, RevisionTimeoutError
 from .ontology import Ontology
 from .protocol import (
     Change,
@@ -163,19 +163,28 @@ class Replica:
     async def wait_for_revision(self, revision: int, *, timeout: float | None = None) -> None:
         """Return once the replica has applied ``revision`` (read your own writes).
 
-        Raises ``TimeoutError`` after ``timeout`` seconds (default: the request timeout).
+        Raises :class:`~wm_store.errors.RevisionTimeoutError` (a ``TimeoutError``) after
+        ``timeout`` seconds (default: the request timeout), naming the revision reached.
         """
-        with anyio.fail_after(self.timeout if timeout is None else timeout):
-            while self.state.revision < revision:
-                event = self._waiters.get(revision)
-                if event is None:
-                    event = self._waiters[revision] = anyio.Event()
-                with anyio.move_on_after(self.catch_up_after):
-                    await event.wait()
-                    continue
-                async with self._lock:
-                    if self.state.revision < revision:
-                        await self._pull()
+        limit = self.timeout if timeout is None else timeout
+        try:
+            with anyio.fail_after(limit):
+                while self.state.revision < revision:
+                    event = self._waiters.get(revision)
+                    if event is None:
+                        event = self._waiters[revision] = anyio.Event()
+                    with anyio.move_on_after(self.catch_up_after):
+                        await event.wait()
+                        continue
+                    async with self._lock:
+                        if self.state.revision < revision:
+                            await self._pull()
+        except TimeoutError:
+            raise RevisionTimeoutError(
+                f"the world model's revision {revision} did not reach this client within "
+                f"{limit:g} s (it is at revision {self.state.revision}): the store or the "
+                "link to it is slow or down"
+            ) from None
 
     async def sync(self) -> None:
         """Pull any change the stream has not delivered yet."""

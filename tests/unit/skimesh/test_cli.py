@@ -8,7 +8,7 @@ import argparse
 import pytest
 
 from meshlink import MeshConfig, mesh_config_from_args
-from skimesh.cli import build_parser, main
+from skimesh.cli import build_parser, describe_error, main
 
 ROUTER_A, ROUTER_B = "tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"
 ZENOH_FLAGS = ["--connect", ROUTER_A, "--connect", ROUTER_B, "--config", "site.json5"]
@@ -81,3 +81,10 @@ def test_the_agent_needs_a_scenario_or_an_agent_config(
         main(["agent", "--config", "client.json5"])
     assert exit_info.value.code == 2
     assert "one of the arguments --scenario --agent-config is required" in capsys.readouterr().err
+
+
+def test_an_error_without_a_message_is_still_described() -> None:
+    """A bare ``TimeoutError`` (``anyio.fail_after``) is printed as words, never as nothing."""
+    assert "timed out" in describe_error(TimeoutError())
+    assert describe_error(KeyError()) == "KeyError"
+    assert describe_error(TimeoutError("store: no answer in 5 s")) == "store: no answer in 5 s"

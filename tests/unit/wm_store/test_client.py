@@ -9,9 +9,22 @@ import anyio
 import pytest
 
 from wm_store.client import WmClient
-from wm_store.errors import ConflictError, ElementNotFoundError, TransportError
+from wm_store.errors import (
+    ConflictError,
+    ElementNotFoundError,
+    RevisionTimeoutError,
+    TransportError,
+)
 from wm_store.ontology import Ontology
-from wm_store.protocol import Change, Relation, Reply, Request, TemplateDef
+from wm_store.protocol import (
+    AddElement,
+    Change,
+    Relation,
+    Reply,
+    Request,
+    TemplateDef,
+    Transact,
+)
 from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec
 from wm_store.service import WmService
 from wm_store.store import WmStore
@@ -127,6 +140,56 @@ async def test_gap_at_the_end_is_pulled_by_waiter(ontology: Ontology) -> None:
             await writer.add_element("Gear")  # revision 2 never reaches the watcher's stream
             await watcher.wait_for_revision(2, timeout=3)
             assert "Gear-2" in watcher.replica.state.elements
+
+
+class RacedTransport(InMemoryTransport):
+    """Before the first conditional transaction goes to the store, another client writes, and
+    the writing replica applies that change first: the conflict reply then reaches a replica
+    that is already up to date (as over a network, where the change can beat the reply)."""
+
+    def __init__(self, service: WmService) -> None:
+        super().__init__(service)
+        self.replica: WmClient | None = None
+        self.raced = False
+
+    async def request(self, request: Request, *, timeout: float) -> Reply:
+        conditional = isinstance(request, Transact) and request.expect_revision is not None
+        if conditional and not self.raced and self.replica is not None:
+            self.raced = True
+            async with WmClient.connect(InMemoryTransport(self.service)) as other:
+                revision = (await other.transact([AddElement(type="Gear")])).revision
+            await self.replica.wait_for_revision(revision)
+        return await super().request(request, timeout=timeout)
+
+
+async def test_a_registration_that_lost_a_race_is_made_again_at_once(
+    ontology: Ontology,
+) -> None:
+    """The replica already shows the write that made the registration conflict: it is made
+    again at once, not after waiting for a revision nobody writes (which timed out)."""
+    reg = RobotRegistration(agent="r2-agent", address="a", robot_type="Robot", robot_label="r2")
+    async with store_service(ontology) as service:
+        transport = RacedTransport(service)
+        async with WmClient.connect(transport, ontology, timeout=2.0) as wm:
+            transport.replica = wm
+            ids = await wm.register_robot(reg)
+            assert transport.raced and wm.revision == 2
+            assert wm.get_element(ids["$robot"]).label == "r2"
+            assert [e.id for e in wm.resolve_element(type="Gear")] == ["Gear-1"]
+
+
+async def test_a_revision_that_never_comes_times_out_with_a_message(ontology: Ontology) -> None:
+    """Waiting for a revision the store has not reached fails as a typed, worded error that is
+    also a ``TimeoutError`` (a bare one printed as an empty line in the CLI)."""
+    async with (
+        store_service(ontology) as service,
+        WmClient.connect(InMemoryTransport(service), ontology) as wm,
+    ):
+        await wm.add_element("Gear")
+        with pytest.raises(RevisionTimeoutError) as caught:
+            await wm.wait_for_revision(5, timeout=0.6)
+        assert isinstance(caught.value, TimeoutError) and isinstance(caught.value, TransportError)
+        assert "revision 5" in str(caught.value) and "at revision 1" in str(caught.value)
 
 
 async def test_watch_and_callbacks(ontology: Ontology) -> None:
