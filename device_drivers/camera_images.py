@@ -67,6 +67,8 @@ class CameraThread:
                 pass
             return
         data = mujoco.MjData(self._model)
+        what = mujoco.MjvOption()
+        what.sitegroup[:] = 0  # a camera sees the world, not the model's markers (the tcp site)
         try:
             while (item := self._queue.get()) is not None:
                 t, qpos = item
@@ -75,7 +77,7 @@ class CameraThread:
                 mujoco.mj_camlight(self._model, data)
                 self._rec.set_time("sim_time", duration=t)
                 for camera in self._cameras:
-                    renderer.update_scene(data, camera=camera)
+                    renderer.update_scene(data, camera=camera, scene_option=what)
                     image = rr.Image(renderer.render()).compress(jpeg_quality=80)
                     self._rec.log(f"cameras/{camera.replace('/', '.')}", image)
                 self.frames += 1
