@@ -54,8 +54,11 @@ from msgspec import Meta, Struct
 from device_drivers.robot_spec import RGBA, Pose2D, RobotSpec
 
 __all__ = [
+    "CABINET_TOP",
+    "DRAWER_CLEARANCE",
     "ApplianceEntry",
     "ContainerEntry",
+    "DrawerSpec",
     "FurnitureEntry",
     "PartEntry",
     "Placement",
@@ -108,14 +111,40 @@ class RobotEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
         return msgspec.structs.replace(self.model, name=self.name)
 
 
-FurnitureShape = Literal["table", "shelf", "block", "area"]
-_DEFAULT_SHAPE: dict[str, FurnitureShape] = {"Station": "area", "Shelf": "shelf", "Table": "table"}
+FurnitureShape = Literal["table", "shelf", "block", "area", "cabinet"]
+_DEFAULT_SHAPE: dict[str, FurnitureShape] = {
+    "Station": "area",
+    "Shelf": "shelf",
+    "Table": "table",
+    "Cabinet": "cabinet",
+}
+
+
+CABINET_TOP = 0.02
+"""Thickness of a cabinet's top board, m."""
+DRAWER_CLEARANCE = 0.01
+"""Gap between a drawer and its slot, above and below, m."""
+
+
+class DrawerSpec(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """The drawer of a ``cabinet`` furniture, right under its top: an open box on a slide
+    joint that pulls out towards the cabinet's front (+x of its frame) by at most ``travel``,
+    with a bar handle on its front panel, ``handle_standoff`` m out from the panel (room for a
+    finger behind it). ``height``: of the box, m. Built by :mod:`device_drivers.drawer_model`."""
+
+    label: Label
+    type: str = "Drawer"
+    height: Annotated[float, Meta(ge=0.05, le=0.5)] = 0.12
+    travel: Annotated[float, Meta(gt=0.02, le=1.0)] = 0.30
+    handle_standoff: Annotated[float, Meta(ge=0.03, le=0.15)] = 0.05
+    rgba: RGBA = (0.80, 0.72, 0.58, 1.0)
 
 
 class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """Fixed furniture or a location. ``size`` = footprint x, y and top height. Shapes:
     ``table`` (top and legs), ``shelf`` (top, lower board, sides), ``block`` (solid, e.g. a
-    worktop), ``area`` (a floor marking with no collision: a station)."""
+    worktop), ``area`` (a floor marking with no collision: a station), ``cabinet`` (solid,
+    with a ``drawer`` under its top opening at its front, +x)."""
 
     type: str
     label: Label
@@ -127,6 +156,8 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
     station: str = ""
     """The station (an ``area`` furniture label) this belongs to: world-model ``contain``."""
     rgba: RGBA = (0.62, 0.50, 0.38, 1.0)
+    drawer: DrawerSpec | None = None
+    """A ``cabinet``'s drawer (only a cabinet has one)."""
 
     @property
     def kind(self) -> FurnitureShape:
@@ -288,6 +319,7 @@ class Scenario(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
         groups: list[list[str]] = [
             [r.name for r in self.robots],
             [f.label for f in self.furniture],
+            [f.drawer.label for f in self.furniture if f.drawer is not None],
             [c.label for c in self.containers],
             [p.label for p in self.parts],
             [a.label for a in self.appliances],

@@ -16,7 +16,7 @@ from pathlib import Path
 import msgspec
 
 from device_drivers.errors import ScenarioError
-from device_drivers.scenario import GOAL, RobotEntry, Scenario
+from device_drivers.scenario import CABINET_TOP, DRAWER_CLEARANCE, GOAL, RobotEntry, Scenario
 
 __all__ = ["check_scenario", "load_scenario", "parse_scenario"]
 
@@ -114,6 +114,20 @@ def check_scenario(s: Scenario) -> None:
     appliances = {a.label for a in s.appliances}
 
     for i, f in enumerate(s.furniture):
+        if f.drawer is not None and f.kind != "cabinet":
+            fail(f"$.furniture[{i}].drawer: only a cabinet has a drawer (shape {f.kind!r})")
+        if f.kind == "cabinet" and f.drawer is not None:
+            room = f.size[2] - CABINET_TOP - 2 * DRAWER_CLEARANCE - 0.05
+            if f.drawer.height > room:
+                fail(
+                    f"$.furniture[{i}].drawer.height: {f.drawer.height} m does not fit under "
+                    f"the top (at most {room:.3f} m)"
+                )
+            if f.drawer.travel > 0.8 * f.size[0]:
+                fail(
+                    f"$.furniture[{i}].drawer.travel: {f.drawer.travel} m pulls the drawer "
+                    f"out of a {f.size[0]} m deep cabinet (at most {0.8 * f.size[0]:.3f} m)"
+                )
         if f.station and (f.station not in furniture or furniture[f.station].kind != "area"):
             areas = (k for k, v in furniture.items() if v.kind == "area")
             fail(_unknown(f"$.furniture[{i}].station", f.station, "stations", areas))
@@ -168,6 +182,11 @@ def _all_labels(s: Scenario) -> list[tuple[str, str]]:
         found.append((f"$.robots[{i}].name", r.name))
         found += [(f"$.robots[{i}] (device)", f"{r.name}-{d}") for d in ("arm", "gripper", "base")]
     found += [(f"$.furniture[{i}].label", f.label) for i, f in enumerate(s.furniture)]
+    found += [
+        (f"$.furniture[{i}].drawer.label", f.drawer.label)
+        for i, f in enumerate(s.furniture)
+        if f.drawer is not None
+    ]
     found += [(f"$.containers[{i}].label", c.label) for i, c in enumerate(s.containers)]
     found += [(f"$.parts[{i}].label", p.label) for i, p in enumerate(s.parts)]
     found += [(f"$.appliances[{i}].label", a.label) for i, a in enumerate(s.appliances)]

@@ -6,6 +6,7 @@ Names (MuJoCo body = scenario label, so the world model's labels find their bodi
     <Label>                        body of a furniture, container, part or appliance
     <Label>/top                    support geom of a furniture (contact surface of a platform)
     <Label>/door                   microwave door body, hinge joint and door motor (actuator)
+    <Drawer label>, <...>/slide    a cabinet's drawer body and its slide joint (drawer_model)
     <robot>/grasp/<Label>          weld equality gripper -> graspable object, inactive at start
     <Label>                        site + camera of a fixed camera
 
@@ -23,6 +24,7 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
+from device_drivers.drawer_model import add_cabinet
 from device_drivers.errors import ModelError
 from device_drivers.placement import WorldPlacement, resolve_placements
 from device_drivers.robot_model import build_world
@@ -80,7 +82,7 @@ def build_scene(s: Scenario) -> mujoco.MjSpec:
     world = build_world([(r.spec, r.pose) for r in s.robots], floor_size=s.floor_size)
     placed = resolve_placements(s)
     for f in s.furniture:
-        _furniture(world.worldbody, f, placed[f.label])
+        _furniture(world, f, placed[f.label])
     for c in s.containers:
         p = placed[c.label]
         if p.robot:
@@ -129,8 +131,8 @@ def _box(
     body.add_geom(name=name, type=_BOX, size=list(half), pos=list(pos), **kw)
 
 
-def _furniture(root: mujoco.MjsBody, f: FurnitureEntry, p: WorldPlacement) -> None:
-    body = root.add_body(name=f.label, pos=[p.x, p.y, 0.0], quat=_quat(p.yaw))
+def _furniture(world: mujoco.MjSpec, f: FurnitureEntry, p: WorldPlacement) -> None:
+    body = world.worldbody.add_body(name=f.label, pos=[p.x, p.y, 0.0], quat=_quat(p.yaw))
     hx, hy, top = f.size[0] / 2, f.size[1] / 2, f.top
     rgba = list(f.rgba)
     if f.kind == "area":
@@ -138,6 +140,9 @@ def _furniture(root: mujoco.MjsBody, f: FurnitureEntry, p: WorldPlacement) -> No
         return
     if f.kind == "block":
         _box(body, f"{f.label}/top", [hx, hy, top / 2], [0, 0, top / 2], rgba=rgba)
+        return
+    if f.kind == "cabinet":
+        add_cabinet(world, body, f)
         return
     _box(body, f"{f.label}/top", [hx, hy, _SLAB / 2], [0, 0, top - _SLAB / 2], rgba=rgba)
     leg = [0.02, 0.02, (top - _SLAB) / 2]

@@ -7,6 +7,7 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
     Station-1 contain Shelf-1 contain PartBox-1 contain Gear-1      (furniture -> station,
     Worktop-1 contain MealBox-1, Tray-1                               containers, parts)
     Table-1 contain Microwave-1 hasA Microwave-1-door (MicrowaveDoor)
+    Cabinet-1 hasA Drawer-1
     r1 hasA r1-arm, r1-gripper, r1-base, r1-camera;  r1 contain KitBox-1
     r1 at r1-home (a Location at the robot's start pose)
     PartBox-1 at Station-1; Worktop-1, Table-1, Microwave-1, Tray-1 at friend-home
@@ -19,7 +20,8 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   skill moves its robot's descendants with it.
 - **Prior knowledge**: each arm's home posture (``jointPositions``, :data:`HOME_6`, or the
   ``home`` of an arm from MJCF files);
-  appliance doors get a pose and size (for an arm that swings them);
+  appliance doors get a pose and size (for an arm that swings them); a cabinet's drawer its
+  pose, size, ``drawerOpen = false`` and its handle as ``graspPose`` / ``graspWidth``;
   closed containers (a meal box) a ``graspPose`` from the side facing the robot in the
   scenario layout (their -x face), so they can go into an appliance's cavity.
 - **Sizes**: furniture and containers ``SizeCuboid`` (outside extents), parts by shape;
@@ -46,10 +48,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+from device_drivers.drawer_layout import HANDLE_HALF, drawer_layout
 from device_drivers.placement import WorldPlacement, resolve_placements
 from device_drivers.scenario import (
     ApplianceEntry,
     ContainerEntry,
+    FurnitureEntry,
     PartEntry,
     RobotEntry,
     Scenario,
@@ -140,6 +144,25 @@ def _door(a: ApplianceEntry, p: WorldPlacement) -> dict[str, Value]:
     centre = body.compose(Transform((d + DOOR_HALF_THICKNESS, 0.0, h / 2), flip))
     size = SizeCuboid(x=2 * DOOR_HALF_THICKNESS, y=a.size[1], z=h)
     return {Prop.pose: to_wm_pose(centre), Prop.size: size}
+
+
+def _drawer(f: FurnitureEntry) -> dict[str, Value]:
+    """A cabinet's closed drawer: pose (the box's centre; x out of the cabinet's front), size,
+    ``drawerOpen = false``, and the handle as a grasp: tcp pointing down at the bar, fingers
+    closing along the drawer's x (so one finger sits between the bar and the panel)."""
+    assert f.drawer is not None
+    layout = drawer_layout(f, f.drawer)
+    cabinet = Transform((f.pose.x, f.pose.y, 0.0), quat_from_yaw(f.pose.yaw))
+    centre = cabinet.compose(Transform(layout.centre))
+    (hx, hy, hz), (cx, cy, cz) = layout.handle, layout.centre
+    q = quat_from_axes((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, -1.0))
+    return {
+        Prop.pose: to_wm_pose(centre),
+        Prop.size: SizeCuboid(*layout.size),
+        Prop.drawerOpen: False,
+        Prop.graspPose: Pose(Position(hx - cx, hy - cy, hz - cz), Orientation(*q)),
+        Prop.graspWidth: 2 * HANDLE_HALF[0],
+    }
 
 
 def _side_grasp(depth: float, height: float) -> Pose:
@@ -263,6 +286,8 @@ class _Builder:
                 Prop.size: SizeCuboid(x=f.size[0], y=f.size[1], z=height),
             }
             self.add(f.type, f.label, props, f.station)
+            if f.drawer is not None:
+                self.add(f.drawer.type, f.drawer.label, _drawer(f), f.label, Rel.hasA)
 
     def container(self, c: ContainerEntry) -> None:
         if c.label in self.added:

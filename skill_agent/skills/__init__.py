@@ -1,5 +1,6 @@
 """The standard skill library: navigate, locate, pick / take_out, place / serve / put_in, door
-skills for an arm and for a smart appliance, heat, operate (an appliance's buttons).
+skills for an arm and for a smart appliance, drawer skills for an arm, heat, operate (an
+appliance's buttons).
 
 Each skill is a :class:`~skill_agent.skill.Skill` subclass with a full description (parameters
 typed by ontology classes, pre / hold / post conditions in the SkiROS style), sensing in
@@ -17,6 +18,8 @@ module             skills (name: class)                             used by
 ``serve``          serve: :class:`Serve`, put_in: :class:`PutIn`    arm robots
 ``doors``          open_door / close_door: :class:`ArmOpenDoor`,    arm robots (unpowered doors)
                    :class:`ArmCloseDoor`
+``drawers``        open_drawer / close_drawer:                      arm robots
+                   :class:`ArmOpenDrawer`, :class:`ArmCloseDrawer`
 ``appliance``      open_door / close_door / heat:                   a smart appliance's agent
                    :class:`ApplianceOpenDoor`,
                    :class:`ApplianceCloseDoor`, :class:`Heat`
@@ -34,6 +37,8 @@ from .appliance import ApplianceOpenDoor as ApplianceOpenDoor
 from .appliance import Heat as Heat
 from .doors import ArmCloseDoor as ArmCloseDoor
 from .doors import ArmOpenDoor as ArmOpenDoor
+from .drawers import ArmCloseDrawer as ArmCloseDrawer
+from .drawers import ArmOpenDrawer as ArmOpenDrawer
 from .locate import Locate as Locate
 from .locate import locate_object as locate_object
 from .navigate import Navigate as Navigate
@@ -52,7 +57,9 @@ __all__ = [
     "ApplianceCloseDoor",
     "ApplianceOpenDoor",
     "ArmCloseDoor",
+    "ArmCloseDrawer",
     "ArmOpenDoor",
+    "ArmOpenDrawer",
     "Heat",
     "Locate",
     "Navigate",
@@ -76,6 +83,8 @@ ALL_SKILLS = (
     PutIn,
     ArmOpenDoor,
     ArmCloseDoor,
+    ArmOpenDrawer,
+    ArmCloseDrawer,
     ApplianceOpenDoor,
     ApplianceCloseDoor,
     Heat,

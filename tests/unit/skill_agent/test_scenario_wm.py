@@ -8,10 +8,14 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 
 import anyio
+import mujoco
+import numpy as np
 import pytest
 
 from device_drivers.placement import resolve_placements
 from device_drivers.scenario_load import load_scenario
+from device_drivers.scene_model import build_scene
+from skill_agent.primitives.poses import to_transform
 from skill_agent.scenario_wm import HOME_6, HOME_7, scenario_ops
 from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
 from wm_store.protocol import AddElement, Pose, SizeCuboid, SizeCylinder
@@ -123,7 +127,22 @@ async def test_the_meal_scene(wm: WmClient) -> None:
     assert Prop.graspPose in wm.get_element(ids["MealBox-1"]).properties  # closed: side grasp
     home = ids["friend-home"]
     reachable = {label_of(wm, r.subject) for r in wm.query_relation(predicate=Rel.at, obj=home)}
-    assert reachable == {"friend", "Worktop-1", "Table-1", "Tray-1", "Microwave-1"}
+    assert reachable == {"friend", "Worktop-1", "Table-1", "Tray-1", "Microwave-1", "Cabinet-1"}
+    # the cabinet's drawer: closed, its handle a grasp that lands on the bar of the scene
+    drawer = wm.get_element(ids["Drawer-1"])
+    assert drawer.type == Cls.Drawer and drawer.properties[Prop.drawerOpen] is False
+    assert wm.get_parent(drawer.id).id == ids["Cabinet-1"]  # type: ignore[union-attr]
+    grasp = drawer.properties[Prop.graspPose]
+    assert isinstance(grasp, Pose)
+    handle = to_transform(wm.spatial.world_pose(drawer.id)).compose(to_transform(grasp))
+    model = build_scene(load_scenario(SCENARIOS / "meal" / "scenario.toml")).compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    bar = data.geom("Drawer-1/handle").xpos
+    assert np.allclose(handle.translation, bar, atol=1e-9)
+    assert drawer.properties[Prop.graspWidth] == pytest.approx(
+        2 * model.geom("Drawer-1/handle").size[0]
+    )
 
 
 async def test_elements_already_there_are_reused(wm: WmClient) -> None:
