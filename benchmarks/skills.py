@@ -14,11 +14,16 @@ Figures (each beside a baseline measured in the same run; method and results:
 2. baselines to the same agent process: a raw Zenoh ``get`` round trip (synchronous
    zenoh-python, no event loop) and a ``Mesh.request`` round trip (the anyio bridge on both
    ends: what any skill request pays);
-3. runs/s with 8 concurrent callers (one shared client), against 1 caller.
+3. runs/s with 8 concurrent callers (one shared client), against 1 caller;
+4. stop -> ``preempted``: a client stops a run of ``idle`` (waits in ``execute`` until
+   stopped) in the agent process; time from the ``StopRun`` sent until the ``preempted``
+   result arrives, on the run's progress stream and as the ``StopRun`` reply
+   (``AgentClient.stop``), beside the raw get round trip of 2.
 
 Processes: a Zenoh router, an in-memory world-model store and the agent (``noop`` from
-``configs/agents/noop.toml``, plus two echo queryables for the baselines) are children of this
-script (``--role``), on 127.0.0.1 only (free port, multicast scouting off), stopped by PID.
+``configs/agents/noop.toml`` plus :class:`Idle` from this module, and two echo queryables for
+the baselines) are children of this script (``--role``), on 127.0.0.1 only (free port,
+multicast scouting off), stopped by PID.
 """
 
 from __future__ import annotations
@@ -54,10 +59,11 @@ from benchmarks.common import (
 )
 from meshlink import Answer, IncomingQuery, MeshConfig, open_mesh, to_zenoh_config
 from meshlink.bridge import call0, undeclare
-from skill_agent.client import AgentClient
-from skill_agent.config import load_config
-from skill_agent.protocol import Progress, RunEvent
+from skill_agent.client import AgentClient, new_run_id
+from skill_agent.config import AgentConfig, load_config
+from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
 from skill_agent.server import run_agent
+from skill_agent.skill import Skill, SkillContext
 from skimesh.runtime import run_service
 from wm_store import Ontology, StoreConfig, WmStore, serve_store
 
@@ -69,6 +75,16 @@ BREAKDOWN = {
 PAYLOAD = 200  # bytes of the baseline replies (a StartRun / RunStarted pair is ~100-200 bytes)
 AGENT = "noop"
 CALLERS = 8
+IDLE_SKILL = "benchmarks.skills:Idle"
+
+
+class Idle(Skill):
+    """Waits in ``execute`` until stopped; nothing to make safe. What the stop figure stops."""
+
+    description = SkillDescription(name="idle", doc="Waits until stopped.", duration=0.0)
+
+    async def execute(self, ctx: SkillContext) -> None:
+        await anyio.sleep_forever()
 
 
 class Plan(msgspec.Struct, frozen=True):
@@ -77,14 +93,32 @@ class Plan(msgspec.Struct, frozen=True):
     warmup: int
     raw_calls: int
     throughput_seconds: float
+    stops: int
 
 
 FULL = Plan(
-    runs=2000, per_run_subscription_runs=500, warmup=200, raw_calls=2000, throughput_seconds=5.0
+    runs=2000,
+    per_run_subscription_runs=500,
+    warmup=200,
+    raw_calls=2000,
+    throughput_seconds=5.0,
+    stops=1000,
 )
 QUICK = Plan(
-    runs=300, per_run_subscription_runs=100, warmup=50, raw_calls=300, throughput_seconds=1.5
+    runs=300,
+    per_run_subscription_runs=100,
+    warmup=50,
+    raw_calls=300,
+    throughput_seconds=1.5,
+    stops=150,
 )
+
+
+def agent_config() -> AgentConfig:
+    """``configs/agents/noop.toml`` with :class:`Idle` added to its skills."""
+    config = load_config(ROOT / "configs" / "agents" / f"{AGENT}.toml")
+    skills = msgspec.structs.replace(config.skills, paths=[*config.skills.paths, IDLE_SKILL])
+    return msgspec.structs.replace(config, skills=skills)
 
 
 def echo_keys(mesh: str) -> tuple[str, str]:
@@ -123,7 +157,7 @@ def child_agent(args: argparse.Namespace) -> int:
         return [Answer(key=bridge_key, payload=reply)]
 
     async def main() -> int:
-        config = load_config(ROOT / "configs" / "agents" / f"{AGENT}.toml")
+        config = agent_config()
         mesh_config = MeshConfig(connect=(args.connect,), mesh=args.mesh)
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             queryable = mesh.session.declare_queryable(raw_key, on_query)
@@ -206,6 +240,9 @@ async def measured_phases(endpoint: str, mesh_name: str, plan: Plan) -> dict[str
             out[f"runs_per_s_{CALLERS}"] = await throughput(
                 shared, CALLERS, plan.throughput_seconds
             )
+            out["stop_published_us"], out["stop_replied_us"] = await timed_stops(
+                shared, plan.warmup // 4, plan.stops
+            )
         out["run_per_run_subscription_us"], _ = await timed_runs(
             AgentClient(mesh, AGENT), plan.per_run_subscription_runs
         )
@@ -224,6 +261,53 @@ async def timed_calls(client: AgentClient, warmup: int, count: int) -> Stats:
         if i >= warmup:
             times.append(elapsed)
     return summarize(times, 1e-3)
+
+
+async def timed_stops(client: AgentClient, warmup: int, count: int) -> tuple[Stats, Stats]:
+    """Stop a run of ``idle`` once it executes, ``warmup + count`` times: ``StopRun`` sent ->
+    the ``preempted`` result on the run's progress stream, and -> the ``StopRun`` reply
+    carrying it (both in flight at once, as for any caller that watches the run it stops)."""
+    published: list[int] = []
+    replied: list[int] = []
+    for i in range(warmup + count):
+        on_stream, in_reply = await one_stop(client)
+        if i >= warmup:
+            published.append(on_stream)
+            replied.append(in_reply)
+    return summarize(published, 1e-3), summarize(replied, 1e-3)
+
+
+async def one_stop(client: AgentClient) -> tuple[int, int]:
+    """Start ``idle``, wait until it executes, stop it: ns until the result was published
+    (seen on the progress stream) and until ``AgentClient.stop`` returned it."""
+    run_id = new_run_id()
+    times: dict[str, int] = {}
+
+    def check(result: RunResult) -> None:
+        if result.reason != "preempted":
+            raise RuntimeError(f"idle run ended {result.reason}: {result.message}")
+
+    async with client.watch(run_id) as events:
+        await client.start("idle", run_id=run_id)
+        async for event in events:
+            if isinstance(event, Progress) and event.state == "executing":
+                break
+        start = time.perf_counter_ns()
+
+        async def stop() -> None:
+            check(await client.stop(run_id))
+            times["reply"] = time.perf_counter_ns() - start
+
+        async with anyio.create_task_group() as tg:
+            tg.start_soon(stop)
+            async for event in events:
+                if isinstance(event, RunResult):
+                    times["stream"] = time.perf_counter_ns() - start
+                    check(event)
+                    break
+    if "stream" not in times:
+        raise RuntimeError(f"run {run_id}: the progress stream ended without the result")
+    return times["stream"], times["reply"]
 
 
 async def throughput(client: AgentClient, callers: int, seconds: float) -> float:
@@ -313,6 +397,34 @@ def make_rows(d: dict[str, Any]) -> list[Row]:
             baseline="1 caller",
             baseline_value=one,
         ),
+        Row(
+            figure="stop -> preempted result published, p50",
+            value=d["stop_published_us"].p50,
+            unit="us",
+            baseline="raw get p50",
+            baseline_value=raw.p50,
+        ),
+        Row(
+            figure="stop -> preempted result published, p99",
+            value=d["stop_published_us"].p99,
+            unit="us",
+            baseline="raw get p99",
+            baseline_value=raw.p99,
+        ),
+        Row(
+            figure="stop -> StopRun reply with the result, p50",
+            value=d["stop_replied_us"].p50,
+            unit="us",
+            baseline="raw get p50",
+            baseline_value=raw.p50,
+        ),
+        Row(
+            figure="stop -> StopRun reply with the result, p99",
+            value=d["stop_replied_us"].p99,
+            unit="us",
+            baseline="raw get p99",
+            baseline_value=raw.p99,
+        ),
     ]
 
 
@@ -353,7 +465,14 @@ def run(plan: Plan, json_path: Path | None) -> int:
         f"load average {conditions['load_start']} at start, {conditions['load_end']} at end\n"
     )
     print(format_table(rows))
-    for name in ("raw_rtt_us", "bridge_rtt_us", "run_us", "run_per_run_subscription_us"):
+    for name in (
+        "raw_rtt_us",
+        "bridge_rtt_us",
+        "run_us",
+        "run_per_run_subscription_us",
+        "stop_published_us",
+        "stop_replied_us",
+    ):
         s: Stats = details[name]
         print(
             f"{name}: n={s.count} p50={s.p50:.0f} p90={s.p90:.0f} p99={s.p99:.0f} max={s.max:.0f}"

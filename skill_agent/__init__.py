@@ -5,9 +5,10 @@ Layers inside the package (pure core first, adapters last)::
     protocol, errors             wire schema (descriptions, requests, run events) and error tree
     skill                        the implementation contract: Skill, SkillContext, WorldView
     conditions, params,          conditions (evaluate / effects / planner atoms), parameter
-    inference                    specification and inference, load-time checks
-    run, resources, events,      one run's lifecycle, device locks, the event log,
-    simulated, composite, core   simulated outcomes, composite skills, AgentCore
+    param_states, inference      specification, states and inference, load-time checks
+    run, run_wm, resources,      one run's lifecycle, its recorded world-model view, device
+    events, simulated,           locks, the event log, simulated outcomes, composite skills,
+    composite, core              AgentCore
     config, plugins              agent config (TOML), skill plug-ins (entry points, paths, reload)
     server, client, adapter      Zenoh: serve an agent, call one, drive external services
     event_feed                   Zenoh: read agents' event logs (``agents/*/events``)

@@ -92,7 +92,7 @@ def _remote_error(payload: bytes) -> SkillError:
         error = _error_decoder.decode(payload)
     except msgspec.MsgspecError:
         return RemoteSkillError("remote_error", payload.decode("utf-8", errors="replace"))
-    return error_for_code(error.code, error.message)
+    return error_for_code(error.code, error.message, error.param_states)
 
 
 class RunFeed:
@@ -223,7 +223,7 @@ class AgentClient:
         except msgspec.MsgspecError as e:
             raise AgentTransportError(f"undecodable reply from agent {self.agent!r}: {e}") from e
         if isinstance(reply, ErrorReply):
-            raise error_for_code(reply.code, reply.message)
+            raise error_for_code(reply.code, reply.message, reply.param_states)
         return reply
 
     async def _expect(

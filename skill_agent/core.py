@@ -29,7 +29,7 @@ import msgspec
 from anyio.abc import TaskGroup, TaskStatus
 
 from wm_store.client import WmClient
-from wm_store.protocol import Op, Value
+from wm_store.protocol import Value
 
 from .composite import CompositeSkill, Node, check_composite
 from .conditions import ConditionRegistry
@@ -411,8 +411,8 @@ class AgentCore:
             except Exception:
                 _log.exception("a run-event subscriber failed")
 
-    def _written(self, run_id: str, ops: list[Op], revision: int) -> None:
-        self.events.record(WmWriteEntry(agent=self.name, run_id=run_id, revision=revision, ops=ops))
+    def _written(self, entry: WmWriteEntry) -> None:
+        self.events.record(entry)
 
     def _ended(self, run_id: str) -> None:
         self._catalogs.pop(run_id, None)

@@ -22,9 +22,16 @@ Hierarchy::
     └── RemoteSkillError           the agent answered with an error (keeps its code)
 
 Each class has a stable ``code`` used on the wire (:class:`skill_agent.protocol.ErrorReply`).
+A :class:`ParameterError` refusing a start because parameters could not all be specified also
+carries every parameter's state (``param_states``: ``initialized`` / ``specified``), on the
+wire too.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+
+from .protocol import ParamState
 
 __all__ = [
     "AgentInternalError",
@@ -62,6 +69,13 @@ class UnknownSkillError(SkillError):
 
 class ParameterError(SkillError):
     code = "parameter"
+
+    def __init__(
+        self, message: str, *, param_states: Mapping[str, ParamState] | None = None
+    ) -> None:
+        super().__init__(message)
+        self.param_states: dict[str, ParamState] = dict(param_states or {})
+        """Every parameter's state when the start was refused ({} when not about that)."""
 
 
 class UnknownParameterError(ParameterError):
@@ -147,7 +161,14 @@ _BY_CODE: dict[str, type[SkillError]] = {
 }
 
 
-def error_for_code(code: str, message: str) -> SkillError:
-    """The local exception for an error code received from an agent."""
+def error_for_code(
+    code: str, message: str, param_states: Mapping[str, ParamState] | None = None
+) -> SkillError:
+    """The local exception for an error code received from an agent (a ParameterError with
+    the ``param_states`` the reply carried)."""
     cls = _BY_CODE.get(code)
-    return RemoteSkillError(code, message) if cls is None else cls(message)
+    if cls is None:
+        return RemoteSkillError(code, message)
+    if issubclass(cls, ParameterError):
+        return cls(message, param_states=param_states)
+    return cls(message)

@@ -16,7 +16,7 @@ of the three sizes).
   hardware parameter, when ``robot`` is known, that it is a device of this agent;
 - a missing value takes the parameter's ``default``; an ``optional`` one may stay None (an
   optional element parameter is not inferred); a required value parameter without default
-  -> UnspecifiedParameterError (never a crash later, SkiROS2 #91);
+  -> UnspecifiedParameterError naming every such parameter (never a crash later, SkiROS2 #91);
 - a missing hardware parameter takes the device ``hardware[name]``, else this agent's device
   of that class (the ``hardware`` values and the robot's ``hasA`` parts; several -> the first
   by id, and the reason says so); an *optional* one takes ``hardware[name]``, else this
@@ -28,6 +28,12 @@ of the three sizes).
   device, and ``inferred`` says so; a device of another agent is still refused;
 - a missing element parameter is inferred (:mod:`skill_agent.inference`), afresh on every
   call; ``Specified.inferred`` holds the reason for each value chosen automatically.
+
+Parameter states (SkiROS, :data:`~skill_agent.protocol.ParamState`): every parameter starts
+``initialized`` and becomes ``specified`` once it has a value (given and checked, default,
+bound device, inferred); :mod:`skill_agent.param_states` tells them. A start refused because
+parameters could not all be specified (UnspecifiedParameterError, InferenceError) carries every
+parameter's state in ``param_states`` and names the ones still ``initialized`` in its message.
 """
 
 from __future__ import annotations
@@ -51,9 +57,9 @@ from .errors import (
     ParameterTypeError,
     SkillLoadError,
     UnknownParameterError,
-    UnspecifiedParameterError,
 )
 from .inference import describe_query, infer, matching
+from .param_states import not_inferred_error, param_states, unspecified_error
 from .protocol import (
     AndCond,
     Condition,
@@ -77,6 +83,7 @@ __all__ = [
     "check_description",
     "check_kind",
     "is_value_kind",
+    "param_states",
     "specify",
 ]
 
@@ -269,13 +276,20 @@ def specify(
     known_devices = devices if robot else []  # ``hardware`` alone does not list every device
     values: dict[str, Value] = {}
     inferred: dict[str, str] = {}
-    pending: list[ParamSpec] = []
+    pending: list[ParamSpec] = []  # element parameters to infer
+    missing: list[ParamSpec] = []  # required value parameters without a value
+    no_device: list[InferenceError] = []
     for spec in desc.parameters:
         value = given.get(spec.name)
         value = spec.default if value is None else value
         element = not is_value_kind(spec.type)
+        values[spec.name] = None  # initialized until a value is found below
         if element and spec.kind == "hardware" and not (spec.optional and _none(given, spec)):
-            device, why = _hardware_value(desc, spec, value, view, hardware, devices, robot)
+            try:
+                device, why = _hardware_value(desc, spec, value, view, hardware, devices, robot)
+            except InferenceError as exc:
+                no_device.append(exc)
+                continue
             values[spec.name] = device
             if why:
                 inferred[spec.name] = why
@@ -284,17 +298,20 @@ def specify(
         elif value is not None:
             values[spec.name] = check_kind(spec, value)
         elif spec.optional:
-            values[spec.name] = None
+            pass
         elif not element:
-            raise UnspecifiedParameterError(
-                f"parameter '{spec.name}' ({spec.type}) of skill '{desc.name}' is required and "
-                "has no default; give it in the start request's params"
-            )
+            missing.append(spec)
         else:
-            values[spec.name] = None
             pending.append(spec)
+    if missing:
+        raise unspecified_error(desc, missing, values)
+    if no_device:
+        raise not_inferred_error(no_device[0], desc, values)
     if pending:
-        chosen, reasons = infer(desc, view, values, pending, robot=robot, registry=registry)
+        try:
+            chosen, reasons = infer(desc, view, values, pending, robot=robot, registry=registry)
+        except InferenceError as exc:
+            raise not_inferred_error(exc, desc, values) from None
         values.update(chosen)
         inferred.update(reasons)
     return Specified(values=values, inferred=inferred)

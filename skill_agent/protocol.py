@@ -44,6 +44,7 @@ __all__ = [
     "OrCond",
     "ParamKind",
     "ParamSpec",
+    "ParamState",
     "PauseRun",
     "Progress",
     "ProgressEntry",
@@ -80,6 +81,12 @@ SCHEMA_VERSION = 1
 # --------------------------------------------------------------------------- parameters
 
 ParamKind = Literal["online", "offline", "hardware"]
+
+ParamState = Literal["initialized", "specified"]
+"""A parameter's state (SkiROS): ``initialized`` while it has no value (declared, not given,
+no default, not yet inferred), ``specified`` once it has one (given and checked, a default,
+inferred, or a device bound). A run starts only when every required parameter is
+``specified``; an optional parameter may stay ``initialized`` (its value is None)."""
 
 
 class ParamSpec(Struct, frozen=True, kw_only=True):
@@ -288,6 +295,9 @@ class RunInfo(Struct, frozen=True, kw_only=True):
     resources: list[str] = []
     started_at: float = 0.0
     result: RunResult | None = None
+    param_states: dict[str, ParamState] = {}
+    """Every parameter's state in the run: ``specified``, or ``initialized`` for an optional
+    one left without a value."""
 
 
 # --------------------------------------------------------------------------- requests
@@ -385,6 +395,9 @@ class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True)
 
     code: str
     message: str
+    param_states: dict[str, ParamState] = {}
+    """A start refused because parameters could not all be specified (codes
+    ``unspecified_parameter``, ``inference``): every parameter's state at the refusal."""
     schema_version: int = SCHEMA_VERSION
 
 
@@ -438,13 +451,16 @@ class RefusedEntry(Struct, tag="refused", tag_field="kind", kw_only=True):
 
 
 class WmWriteEntry(Struct, tag="wm_write", tag_field="kind", kw_only=True):
-    """A world-model transaction the runtime committed for a run (effects, or a skill's own
-    ``ctx.transact``)."""
+    """A world-model transaction committed for a run: its effects, or a write of its skill
+    (through ``ctx.wm``'s write methods or ``ctx.transact``, in any skill method)."""
 
     agent: str
     run_id: str
     revision: int
     ops: list[Op]
+    step: str = ""
+    """The run's step when it wrote: ``pre_sense``, ``execute``, ``post_sense``, ``commit``
+    (the effects), ``preempt`` (``on_preempt``); "" from an older agent."""
     stamp: float = 0.0
     schema_version: int = SCHEMA_VERSION
 

@@ -29,6 +29,10 @@ run ends with exactly one :class:`~skill_agent.protocol.RunResult`)::
   :meth:`RunContext.checkpoint`); the deadline keeps running while paused.
 - *Simulated outcome*: no sensing, no execute (composite skills do run their children,
   simulated); success is drawn, effects committed on success; failure is ``execution``.
+- *World-model writes*: the skill's ``ctx.wm`` is a :class:`~skill_agent.run_wm.RunWm`; every
+  transaction committed through it (any write method, ``ctx.transact``, the effects) reaches
+  ``RunEnv.on_write`` as a :class:`~skill_agent.protocol.WmWriteEntry` naming the run's step
+  (``preempt`` for ``on_preempt``).
 """
 
 from __future__ import annotations
@@ -54,6 +58,7 @@ from .errors import (
     RunStateError,
     SkillFailure,
 )
+from .param_states import param_states
 from .protocol import (
     Progress,
     ResultReason,
@@ -62,7 +67,9 @@ from .protocol import (
     RunResult,
     RunState,
     SkillDescription,
+    WmWriteEntry,
 )
+from .run_wm import RunWm
 from .simulated import SimulatedOutcomes
 from .skill import Skill
 
@@ -88,7 +95,9 @@ class RunEnv:
     devices: Mapping[str, object] = field(default_factory=dict)
     registry: ConditionRegistry | None = None
     preempt_timeout: float = 5.0
-    on_write: Callable[[str, list[Op], int], None] | None = None
+    on_write: Callable[[WmWriteEntry], None] | None = None
+    """Called with every world-model transaction a run committed (its effects, and every
+    write its skill made through ``ctx.wm`` or ``ctx.transact``); quick, on the loop."""
     run_child: ChildRunner | None = None
 
 
@@ -103,10 +112,13 @@ class RunContext:
         self.params: Mapping[str, Value] = run.params
         self.simulated = run.simulated
         self.log = logging.getLogger(f"skill_agent.skills.{run.description.name}")
+        self._wm = RunWm(run.env.wm, run.wrote)
 
     @property
-    def wm(self) -> WmClient:
-        return self._run.env.wm
+    def wm(self) -> RunWm:
+        """The agent's world-model client as this run's view: reads as the client, every
+        committed write also recorded in the event log (:class:`~skill_agent.run_wm.RunWm`)."""
+        return self._wm
 
     def element(self, param: str) -> Element:
         """The element bound to ``param``; raises ParameterError if it is no element id."""
@@ -152,7 +164,8 @@ class RunContext:
         return await self._run.env.run_child(self._run, skill, params)
 
     async def transact(self, ops: Sequence[Op]) -> int:
-        """Commit ``ops`` in one world-model transaction, recorded in the event log."""
+        """Commit ``ops`` in one world-model transaction (recorded in the event log, as every
+        write through :attr:`wm`); returns its revision."""
         return await self._run.commit(list(ops))
 
 
@@ -214,6 +227,7 @@ class Run:
             resources=list(self.resources),
             started_at=self.started_at,
             result=self.result,
+            param_states=param_states(self.description, self.params),
         )
 
     async def wait(self) -> RunResult:
@@ -353,10 +367,21 @@ class Run:
         return "ok", "simulated success" if self.simulated and not composite else "done"
 
     async def commit(self, ops: list[Op]) -> int:
-        reply = await self.env.wm.transact(ops)
+        """Commit ``ops`` through the run's world-model view (recorded); the revision."""
+        return (await self.context.wm.transact(ops)).revision
+
+    def wrote(self, ops: list[Op], revision: int) -> None:
+        """Record a transaction this run committed (called by its :class:`RunWm`), tagged
+        with the step it was in (``execute``, ``commit``, ``preempt``, ...)."""
         if self.env.on_write is not None:
-            self.env.on_write(self.run_id, ops, reply.revision)
-        return reply.revision
+            entry = WmWriteEntry(
+                agent=self.env.agent,
+                run_id=self.run_id,
+                revision=revision,
+                ops=ops,
+                step=self._step,
+            )
+            self.env.on_write(entry)
 
     async def _sense(self, step: str, method: Callable[[RunContext], Awaitable[None]]) -> None:
         state: RunState = "pre_sense" if step == "pre_sense" else "post_sense"
@@ -428,7 +453,8 @@ class Run:
             return ""
         limit = self.env.preempt_timeout
         with anyio.CancelScope(shield=True):
-            self._emit_progress(self.state, "bringing the hardware to a safe state", step="preempt")
+            self._step = "preempt"  # the step on_preempt's world-model writes are recorded in
+            self._emit_progress(self.state, "bringing the hardware to a safe state")
             with anyio.move_on_after(limit) as scope:
                 try:
                     await self.skill.on_preempt(self.context)

@@ -3,7 +3,10 @@
 This module is the skill layer's Zenoh adapter (the runtime itself, :class:`AgentCore`, knows
 no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
 
-- ``agents/<a>/skills``  queryable: :class:`~skill_agent.protocol.SkillsReply`;
+- ``agents/<a>/skills``  queryable: :class:`~skill_agent.protocol.SkillsReply` to an empty
+  payload or an encoded :class:`~skill_agent.protocol.ListSkills`; any other payload (bytes
+  that are no request, another request) gets an error reply ``bad_request``
+  (:meth:`AgentService.skills_bytes`);
 - ``agents/<a>/rpc``     queryable: one :data:`AgentRequest` -> one :data:`AgentReply`; every
   refusal is a Zenoh *error reply* carrying an :class:`ErrorReply` (``code`` = the error class's
   code, so the client re-raises the same class). Undecodable bytes, unknown tags and wrong
@@ -50,6 +53,7 @@ from .core import AgentCore
 from .errors import (
     AgentInternalError,
     BadRequestError,
+    ParameterError,
     RunStateError,
     SkillError,
     UnknownRunError,
@@ -64,6 +68,7 @@ from .protocol import (
     ListSkills,
     LogEntry,
     OkReply,
+    ParamState,
     PauseRun,
     Reload,
     ResumeRun,
@@ -118,6 +123,21 @@ class AgentService:
             simulated=self.core.simulated is not None,
         )
 
+    def skills_bytes(self, data: bytes) -> tuple[bytes, bool]:
+        """The ``skills`` queryable: ``(payload, ok)`` for a query's payload. Empty or an
+        encoded ``ListSkills``: the skills; anything else: ``bad_request``. Never raises."""
+        if data:
+            try:
+                request = decode_request(data)
+            except msgspec.MsgspecError as e:
+                return _error(BadRequestError.code, f"undecodable request: {e}")
+            if not isinstance(request, ListSkills):
+                name = type(request).__name__
+                return _error(
+                    BadRequestError.code, f"the skills queryable answers ListSkills, not {name}"
+                )
+        return encode(self.skills_reply()), True
+
     async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
         """Decode, dispatch, encode. Returns ``(payload, ok)``; never raises an Exception."""
         try:
@@ -126,6 +146,8 @@ class AgentService:
             return _error(BadRequestError.code, f"undecodable request: {e}")
         try:
             return encode(await self.handle(request)), True
+        except ParameterError as e:
+            return _error(e.code, str(e), e.param_states)
         except SkillError as e:
             return _error(e.code, str(e))
         except ValueError as e:  # e.g. a run id that is no valid key segment
@@ -250,8 +272,11 @@ class RunEventPublisher:
             self.flush()
 
 
-def _error(code: str, message: str) -> tuple[bytes, bool]:
-    return encode(ErrorReply(code=code, message=message)), False
+def _error(
+    code: str, message: str, param_states: Mapping[str, ParamState] | None = None
+) -> tuple[bytes, bool]:
+    reply = ErrorReply(code=code, message=message, param_states=dict(param_states or {}))
+    return encode(reply), False
 
 
 def agent_registration(
@@ -324,8 +349,9 @@ async def serve_agent(
         data, ok = await service.handle_bytes(query.payload or b"")
         return [Answer(key=keys.agent_rpc(name), payload=data, ok=ok)]
 
-    async def skills(_query: IncomingQuery) -> list[Answer]:
-        return [Answer(key=keys.agent_skills(name), payload=encode(service.skills_reply()))]
+    async def skills(query: IncomingQuery) -> list[Answer]:
+        data, ok = service.skills_bytes(query.payload or b"")
+        return [Answer(key=keys.agent_skills(name), payload=data, ok=ok)]
 
     publisher = RunEventPublisher(mesh, name)
     unsubscribe = publisher.attach(core)

@@ -38,7 +38,7 @@ from collections.abc import Mapping, Sequence
 from typing import ClassVar, Protocol, TypeVar, runtime_checkable
 
 from wm_store.ontology import Ontology
-from wm_store.protocol import Element, Query, Relation, Value
+from wm_store.protocol import Element, Op, Query, Relation, Value
 
 from .protocol import SkillDescription
 
@@ -83,8 +83,11 @@ class SkillContext(Protocol):
 
     @property
     def wm(self) -> object:
-        """The agent's :class:`wm_store.WmClient` (typed ``object`` here to keep this module
-        free of the client; skills import ``WmClient`` and ``cast``)."""
+        """The agent's :class:`wm_store.WmClient`, as this run's view: reads go to the agent's
+        replica, and every transaction committed through it (``transact``,
+        ``update_element``, ``add_element``, ``set_relation``, ``observe``, ...) is recorded
+        in the agent's event log with the run and its step. Typed ``object`` here to keep
+        this module free of the client; skills import ``WmClient`` and ``cast``."""
         ...
 
     def element(self, param: str) -> Element:
@@ -102,6 +105,11 @@ class SkillContext(Protocol):
 
     async def checkpoint(self) -> None:
         """Wait here while the run is paused; a quick no-op otherwise."""
+        ...
+
+    async def transact(self, ops: Sequence[Op]) -> int:
+        """Commit ``ops`` in one world-model transaction (recorded in the event log, like
+        every write through :attr:`wm`); returns its revision."""
         ...
 
 

@@ -16,7 +16,9 @@ import anyio
 import pytest
 
 from skill_agent import AgentCore, SimulatedOutcomes, SkillRegistry, StartRun
+from skill_agent.protocol import WmWriteEntry
 from wm_store import InMemoryTransport, Ontology, Relation, WmClient, WmService, WmStore
+from wm_store.protocol import UpdateElement
 
 HERE = Path(__file__).resolve().parent
 
@@ -69,3 +71,21 @@ async def test_pick_part_in_simulated_outcome_mode() -> None:
                 assert where.id == started.params["gripper"]
             else:  # a drawn failure commits nothing
                 assert result.reason == "execution" and box is not None and where.id == box.id
+
+
+@pytest.mark.anyio
+async def test_a_stop_opens_the_gripper_and_the_event_log_records_it() -> None:
+    async with picker() as (core, wm):
+        gear = wm.resolve_element(type="Gear")[0].id
+        params = {"part": gear, "motion_time": 30.0}
+        started = await core.start(StartRun(skill="pick_part", params=params))
+        with anyio.fail_after(5):
+            result = await core.stop(started.run_id)
+        assert result.reason == "preempted"
+        gripper = started.params["gripper"]
+        assert isinstance(gripper, str)
+        assert wm.get_element(gripper).properties["graspWidth"] == 0.08  # OPEN_WIDTH
+        assert wm.get_parent(gear).id != gripper  # type: ignore[union-attr]  # nothing committed
+    (write,) = [e for e in core.events.history() if isinstance(e, WmWriteEntry)]
+    assert (write.run_id, write.step) == (started.run_id, "preempt")  # on_preempt's write
+    assert write.ops == [UpdateElement(id=gripper, properties={"graspWidth": 0.08})]

@@ -2,7 +2,8 @@
 and an agent, each in its own process (``skimesh agent --agent-config ...`` with the
 ``event_log`` key set), read from the test with :class:`EventFeed`.
 
-Covers: a run's entries (run started, progress, the skill's world-model write, the result) and
+Covers: a run's entries (run started, progress, the skill's world-model write made through
+``ctx.wm`` as library skills write, the result) and
 a refused start reach one agent's and every agent's subscribers in order, exactly as the agent
 appended them to its JSON-lines file; payloads that are no log entry are skipped and logged;
 the demo's follower records the entries into an ``.rrd``; the task agent lists each step's
@@ -66,7 +67,7 @@ class Mark(Skill):
 
     async def execute(self, ctx):
         await ctx.progress("adding", fraction=0.0)
-        await ctx.transact([AddElement(type="Gear", label=ctx.params["label"])])
+        await ctx.wm.transact([AddElement(type="Gear", label=ctx.params["label"])])
         await ctx.progress("added", fraction=1.0)
 """
 
@@ -168,7 +169,7 @@ async def test_a_run_reaches_subscribers_in_order_as_in_the_agents_file(site: Si
     progress = [e.progress for e in middle if isinstance(e, ProgressEntry)]
     assert [p.seq for p in progress] == sorted(p.seq for p in progress)
     (write,) = [e for e in middle if isinstance(e, WmWriteEntry)]
-    assert write.run_id == result.run_id and write.revision > 0
+    assert write.run_id == result.run_id and write.revision > 0 and write.step == "execute"
     assert write.ops == [AddElement(type="Gear", label="gear-feed")]
     messages = [e.progress.message if isinstance(e, ProgressEntry) else "WRITE" for e in middle]
     assert messages.index("adding") < messages.index("WRITE") < messages.index("added")

@@ -27,7 +27,7 @@ import anyio
 import anyio.from_thread
 import msgspec
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from meshlink import Mesh, MeshConfig, open_mesh
@@ -35,6 +35,7 @@ from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.errors import AgentTransportError, ResourceBusyError
 from skill_agent.protocol import (
     ErrorReply,
+    ListSkills,
     Progress,
     RunEvent,
     RunInfo,
@@ -42,6 +43,8 @@ from skill_agent.protocol import (
     SkillDescription,
     SkillsReply,
     decode_reply,
+    decode_request,
+    encode,
 )
 from wm_store import WmClient, ZenohTransport
 from wm_store.protocol import Value
@@ -476,6 +479,17 @@ BAD = st.one_of(
 )
 
 
+def lists_skills(payload: bytes) -> bool:
+    """Whether the ``skills`` queryable answers ``payload`` with the skills: empty, or a
+    ``ListSkills`` (unknown fields are ignored, as everywhere); anything else is refused."""
+    if not payload:
+        return True
+    try:
+        return isinstance(decode_request(payload), ListSkills)
+    except msgspec.MsgspecError:
+        return False
+
+
 def test_bad_input_on_every_queryable_gets_error_replies(site: Site) -> None:
     config = MeshConfig(connect=(site.endpoint,), mesh=site.mesh)
     with (
@@ -488,15 +502,23 @@ def test_bad_input_on_every_queryable_gets_error_replies(site: Site) -> None:
             max_examples=120, deadline=None, suppress_health_check=list(HealthCheck), database=None
         )
         @given(payload=BAD)
+        @example(payload=b"\xc1 not msgpack")
+        @example(payload=encode(ListSkills()))
         def check(payload: bytes) -> None:
+            listing = portal.call(lambda: mesh.get(skills, payload, timeout=5.0))
+            assert len(listing) == 1, "the skills queryable: one answer, never silence"
+            answer = decode_reply(listing[0].payload)
+            if lists_skills(payload):
+                assert listing[0].ok and isinstance(answer, SkillsReply), answer
+                return  # a valid request: the rpc queryable would answer it too
+            assert not listing[0].ok, f"bad input listed the skills: {payload!r}"
+            assert isinstance(answer, ErrorReply) and answer.code == "bad_request", answer
             replies = portal.call(lambda: mesh.get(rpc, payload, timeout=5.0))
             assert len(replies) == 1, "exactly one answer, never a crash or silence"
             reply = replies[0]
             assert not reply.ok, f"bad input accepted: {payload!r}"
             error = msgspec.msgpack.decode(reply.payload, type=ErrorReply)
             assert error.code in CODES, error
-            (listing,) = portal.call(lambda: mesh.get(skills, payload, timeout=5.0))
-            assert isinstance(decode_reply(listing.payload), SkillsReply)
 
         check()
         result = portal.call(lambda: AgentClient(mesh, "mover").run("noop"))

@@ -7,7 +7,7 @@ import importlib.util
 import logging
 import sys
 import uuid
-from collections.abc import AsyncIterator, Callable, Coroutine, Mapping
+from collections.abc import AsyncIterator, Callable, Coroutine, Mapping, Sequence
 from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
@@ -36,7 +36,7 @@ from skill_agent.adapter import (
 )
 from skill_agent.errors import SkillFailure
 from skill_agent.protocol import SkillDescription
-from wm_store.protocol import Element, Value
+from wm_store.protocol import Element, Op, Value
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -148,6 +148,9 @@ class FakeContext:
 
     async def checkpoint(self) -> None:
         await anyio.lowlevel.checkpoint()
+
+    async def transact(self, ops: Sequence[Op]) -> int:
+        raise AssertionError("not used")
 
 
 DESC = SkillDescription(name="open_door")

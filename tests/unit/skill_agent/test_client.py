@@ -22,10 +22,12 @@ from skill_agent.errors import (
     RunStateError,
     UnknownRunError,
     UnknownSkillError,
+    UnspecifiedParameterError,
 )
 from skill_agent.protocol import (
     AgentRequest,
     ErrorReply,
+    ListSkills,
     OkReply,
     ParamSpec,
     Progress,
@@ -36,9 +38,11 @@ from skill_agent.protocol import (
     RunStarted,
     RunStatus,
     SkillDescription,
+    SkillsReply,
     StartRun,
     StopRun,
     decode_event,
+    decode_reply,
     decode_request,
     encode,
 )
@@ -71,7 +75,18 @@ class Slow(Skill):
             await anyio.sleep(0.01)
 
 
-SKILLS = {c.description.name: SkillEntry(c.description, c, "test") for c in (Echo, Slow)}
+class Needy(Skill):
+    description = SkillDescription(
+        name="needy",
+        parameters=[
+            ParamSpec(name="speed", type="float"),
+            ParamSpec(name="note", type="str", optional=True),
+            ParamSpec(name="n", type="int", default=1),
+        ],
+    )
+
+
+SKILLS = {c.description.name: SkillEntry(c.description, c, "test") for c in (Echo, Slow, Needy)}
 
 
 @pytest.fixture
@@ -175,6 +190,17 @@ async def test_refusals_are_rebuilt_as_their_classes(router_endpoint: str, mesh_
             await client.start("echo", run_id="a/b")
         with pytest.raises(RunStateError, match="no plug-in registry"):
             await client.reload()
+        with pytest.raises(UnspecifiedParameterError) as unspecified:
+            await client.start("needy")
+        assert unspecified.value.param_states == {
+            "speed": "initialized",
+            "note": "initialized",
+            "n": "specified",
+        }
+        assert "(still initialized: speed, note (optional); specified: n)" in str(unspecified.value)
+        started = await client.start("needy", {"speed": 0.5})
+        states = (await client.status(started.run_id)).param_states
+        assert states == {"speed": "specified", "note": "initialized", "n": "specified"}
 
 
 async def test_watch_stop_pause_resume_status(router_endpoint: str, mesh_name: str) -> None:
@@ -205,8 +231,28 @@ async def test_list_agents_and_find_skills(router_endpoint: str, mesh_name: str)
         assert await list_agents(m) == ["a1", "a2"]
         found = await find_skills(m)
         assert sorted(found) == ["a1", "a2"]
-        assert sorted(d.name for d in found["a1"].skills) == ["echo", "slow"]
-        assert [d.name for d in await AgentClient(m, "a2").skills()] == ["echo", "slow"]
+        assert sorted(d.name for d in found["a1"].skills) == ["echo", "needy", "slow"]
+        assert [d.name for d in await AgentClient(m, "a2").skills()] == ["echo", "slow", "needy"]
+
+
+async def test_the_skills_queryable_answers_list_skills_and_refuses_other_payloads(
+    router_endpoint: str, mesh_name: str
+) -> None:
+    async with real_agent(router_endpoint, mesh_name), session(router_endpoint, mesh_name) as m:
+        key = m.keys.agent_skills("a1")
+        for payload in (None, b"", encode(ListSkills())):
+            (listing,) = await m.get(key, payload)
+            reply = decode_reply(listing.payload)
+            assert listing.ok and isinstance(reply, SkillsReply) and reply.agent == "a1"
+        for payload, why in (
+            (b"\xc1 not msgpack", "undecodable request"),
+            (encode(StartRun(skill="echo")), "answers ListSkills, not StartRun"),
+        ):
+            (refused,) = await m.get(key, payload)
+            error = decode_reply(refused.payload)
+            assert not refused.ok and isinstance(error, ErrorReply), error
+            assert error.code == "bad_request" and why in error.message
+        assert [r.run_id for r in await AgentClient(m, "a1").runs(active_only=False)] == []
 
 
 async def test_cancelling_run_stops_it_on_the_agent(router_endpoint: str, mesh_name: str) -> None:

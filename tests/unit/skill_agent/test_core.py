@@ -87,12 +87,22 @@ async def test_unspecified_required_value_is_refused(
 
     class Speedy(Noop):
         description = SkillDescription(
-            name="speedy", parameters=[ParamSpec(name="speed", type="float")]
+            name="speedy",
+            parameters=[
+                ParamSpec(name="speed", type="float"),
+                ParamSpec(name="note", type="str", optional=True),
+            ],
         )
 
     async with make_agent(entries(probe, Speedy, Needy)) as core:
-        with pytest.raises(UnspecifiedParameterError, match="speed"):
+        with pytest.raises(UnspecifiedParameterError, match="speed") as refused:
             await core.start(StartRun(skill="speedy"))
+        assert refused.value.param_states == {"speed": "initialized", "note": "initialized"}
+        started = await core.start(StartRun(skill="speedy", params={"speed": 1.0}))
+        assert core.status(started.run_id).param_states == {
+            "speed": "specified",
+            "note": "initialized",  # optional, without a value: the run may start
+        }
 
 
 async def test_start_needs_a_running_core_and_valid_run_ids(
@@ -282,6 +292,7 @@ async def test_status_runs_and_subscriptions(make_agent: AgentFactory, probe: Pr
         info = core.status(started.run_id)
         assert info.skill == "wait" and info.resources == [started.params["gripper"]]
         assert info.state == "executing" and info.result is None
+        assert info.param_states == {"gripper": "specified"}  # inferred: initialized no more
         assert [r.run_id for r in core.runs()] == [started.run_id]
         result = await core.stop(started.run_id)
         assert core.runs() == []

@@ -1,8 +1,10 @@
-"""EventLog: history, subscribers, JSON lines read back; an agent logs runs and WM writes."""
+"""EventLog: history, subscribers, JSON lines read back; an agent logs runs and WM writes
+(effects, and a skill's own writes through ``ctx.wm`` in ``execute`` and ``on_preempt``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import anyio
 import pytest
@@ -17,8 +19,12 @@ from skill_agent.events import (
     RunStartedEntry,
     WmWriteEntry,
 )
-from skill_agent.protocol import Progress, RunResult, StartRun
-from wm_store.protocol import SetRelation
+from skill_agent.protocol import ParamSpec, Progress, RunResult, SkillDescription, StartRun
+from skill_agent.skill import SkillContext
+from tests.assets.skills import Probe, entries
+from tests.assets.skills.basic import ProbedSkill
+from wm_store.client import WmClient
+from wm_store.protocol import AddElement, SetRelation, UpdateElement
 
 from .conftest import AgentFactory, Kitting
 
@@ -93,7 +99,7 @@ async def test_agent_logs_runs_results_writes_and_refusals(
     assert kinds[-3] == "WmWriteEntry"
     assert set(kinds[1:-3]) == {"ProgressEntry"}
     (write,) = [e for e in read if isinstance(e, WmWriteEntry)]
-    assert write.revision == result.effects_revision > 0
+    assert write.revision == result.effects_revision > 0 and write.step == "commit"
     assert write.ops[-1] == SetRelation(
         subject=kitting["left"], predicate="contain", object=kitting["gear1"]
     )
@@ -103,3 +109,57 @@ async def test_agent_logs_runs_results_writes_and_refusals(
     assert refused.code == "unknown_skill" and "pick" in refused.message
     seqs = [e.progress.seq for e in read if isinstance(e, ProgressEntry)]
     assert seqs == sorted(seqs) and read[-2] == ResultEntry(result=result, stamp=read[-2].stamp)
+
+
+class Writer(ProbedSkill):
+    """Writes through ``ctx.wm`` as the library skills do: twice in ``execute`` (then waits to
+    be stopped), once in ``on_preempt``."""
+
+    description = SkillDescription(name="writer", parameters=[ParamSpec(name="obj", type="Gear")])
+
+    async def execute(self, ctx: SkillContext) -> None:
+        wm, obj = cast(WmClient, ctx.wm), str(ctx.params["obj"])
+        await wm.update_element(obj, {"mass": 0.3})
+        self.probe.record(ctx.run_id, f"reads mass {wm.get_element(obj).properties['mass']}")
+        await wm.add_element("Gear", "spare")
+        self.probe.record(ctx.run_id, "wrote")
+        await anyio.sleep_forever()
+
+    async def on_preempt(self, ctx: SkillContext) -> None:
+        await cast(WmClient, ctx.wm).update_element(str(ctx.params["obj"]), {"mass": 0.1})
+
+
+async def test_a_skills_own_writes_through_ctx_wm_are_logged_with_their_step(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    gear = kitting["gear1"]
+    async with make_agent(entries(probe, Writer)) as core:
+        run = (await core.start(StartRun(skill="writer", params={"obj": gear}))).run_id
+        with anyio.fail_after(5):
+            await probe.wait_calls("wrote", run_id=run)
+            result = await core.stop(run)
+    assert result.reason == "preempted"
+    assert probe.methods(run) == ["pre_sense", "reads mass 0.3", "wrote"]
+    log = core.events.history()
+    writes = [e for e in log if isinstance(e, WmWriteEntry)]
+    assert [(w.agent, w.run_id, w.step) for w in writes] == [
+        ("r1-agent", run, "execute"),
+        ("r1-agent", run, "execute"),
+        ("r1-agent", run, "preempt"),
+    ]
+    assert [w.ops for w in writes] == [
+        [UpdateElement(id=gear, properties={"mass": 0.3})],
+        [AddElement(type="Gear", label="spare", ref="$new")],
+        [UpdateElement(id=gear, properties={"mass": 0.1})],
+    ]
+    revisions = [w.revision for w in writes]
+    assert revisions == sorted(set(revisions)) and revisions[-1] == kitting.wm.revision
+    assert kitting.wm.get_element(gear).properties["mass"] == 0.1
+    assert [e.label for e in kitting.wm.resolve_element(type="Gear", label="spare")] == ["spare"]
+    safe = next(
+        i
+        for i, e in enumerate(log)
+        if isinstance(e, ProgressEntry) and e.progress.step == "preempt"
+    )
+    last_write = log.index(writes[-1])
+    assert safe < last_write < log.index(ResultEntry(result=result, stamp=log[-1].stamp))

@@ -28,7 +28,14 @@ from skill_agent.errors import (
     UnspecifiedParameterError,
 )
 from skill_agent.inference import describe_query, world_position
-from skill_agent.params import VALUE_KINDS, check_description, check_kind, is_value_kind, specify
+from skill_agent.params import (
+    VALUE_KINDS,
+    check_description,
+    check_kind,
+    is_value_kind,
+    param_states,
+    specify,
+)
 from skill_agent.protocol import (
     AndCond,
     Condition,
@@ -272,8 +279,16 @@ async def test_empty_inference_explains_each_kind_of_rejection() -> None:
             specify(PICK, {"box": w["box_a"]}, w.wm, robot=w["robot"])
         assert str(no_class.value) == (
             "cannot infer parameter 'gear' (a Gear) of skill 'pick': the world model has no "
-            "Gear (nor an element of a subclass). Give 'gear' explicitly"
+            "Gear (nor an element of a subclass). Give 'gear' explicitly (still initialized: "
+            "gear, note (optional); specified: gripper, box, speed)"
         )
+        assert no_class.value.param_states == {
+            "gripper": "specified",
+            "gear": "initialized",
+            "box": "specified",
+            "speed": "specified",
+            "note": "initialized",
+        }
         await w.gears(("table", 0.0), ("table", 0.5))
         heavy = ParamSpec(
             name="gear",
@@ -293,7 +308,8 @@ async def test_empty_inference_explains_each_kind_of_rejection() -> None:
             "cannot infer parameter 'gear' (a Gear) of skill 'pick': every candidate fails a "
             "pre-condition: Gear-1: contain(PartBox-1, Gear-1) does not hold: Gear-1's spatial "
             "parent is Table-1 (contain); Gear-2: contain(PartBox-1, Gear-2) does not hold: "
-            "Gear-2's spatial parent is Table-1 (contain). Give 'gear' explicitly"
+            "Gear-2's spatial parent is Table-1 (contain). Give 'gear' explicitly (still "
+            "initialized: gear, note (optional); specified: gripper, box, speed)"
         )
         none_of_two = with_params(
             ParamSpec(name="gear", type="Gear"), ParamSpec(name="box", type="PartBox")
@@ -325,8 +341,10 @@ async def test_inference_gives_up_after_its_budget(monkeypatch: pytest.MonkeyPat
             specify(desc, {}, w.wm)
         assert str(err.value) == (
             "skill 'pick': inference gave up after 5 trials without finding values of shaft, "
-            "bolt for which every pre-condition holds; give some of them explicitly"
+            "bolt for which every pre-condition holds; give some of them explicitly (still "
+            "initialized: gear, shaft, bolt; specified: none)"
         )
+        assert set(err.value.param_states.values()) == {"initialized"}
 
 
 # --------------------------------------------------------------------------- partial definitions
@@ -450,10 +468,29 @@ async def test_required_optional_and_defaults() -> None:
             specify(desc, {"gear": g}, w.wm)
         assert str(err.value) == (
             "parameter 'force' (float) of skill 'pick' is required and has no default; give it "
-            "in the start request's params"
+            "in the start request's params (still initialized: box (optional), force; "
+            "specified: gear)"
+        )
+        assert err.value.param_states == {
+            "gear": "specified",
+            "box": "initialized",
+            "force": "initialized",
+        }
+        two = with_params(*desc.parameters, ParamSpec(name="depth", type="int"), pre=[])
+        with pytest.raises(UnspecifiedParameterError) as both:
+            specify(two, {}, w.wm)  # every missing value is named; gear is not inferred yet
+        assert str(both.value) == (
+            "parameters 'force' (float), 'depth' (int) of skill 'pick' are required and have "
+            "no default; give them in the start request's params (still initialized: gear, "
+            "box (optional), force, depth; specified: none)"
         )
         spec = specify(desc, {"force": 2.0, "box": None}, w.wm)
         assert spec.values == {"gear": g, "box": None, "force": 2.0}  # optional: not inferred
+        assert param_states(desc, spec.values) == {
+            "gear": "specified",  # inferred
+            "box": "initialized",  # optional, left without a value
+            "force": "specified",
+        }
         defaulted = with_params(ParamSpec(name="gear", type="Gear", default=g), pre=[])
         assert specify(defaulted, {}, w.wm).values == {"gear": g}
 
@@ -491,8 +528,10 @@ async def test_hardware_parameters_come_from_this_agent() -> None:
             f"Gripper devices: Gripper-1, {second}",
         ):
             specify(PICK, {**given, "gripper": foreign}, w.wm, robot=w["robot"])
-        with pytest.raises(InferenceError, match="this agent offers no such device"):
+        with pytest.raises(InferenceError, match="this agent offers no such device") as none:
             specify(PICK, given, w.wm)
+        assert none.value.param_states["gripper"] == "initialized"
+        assert none.value.param_states["gear"] == "specified"
 
 
 async def test_world_position_chains_frames() -> None:

@@ -290,3 +290,4 @@ def _no_leaked_modules() -> Iterator[None]:
 # The guide's example tests (docs/examples/test_pick_part.py) run with the unit tests.
 test_guide_pick_part = guide.test_pick_part_runs_and_commits_its_prediction
 test_guide_pick_part_simulated = guide.test_pick_part_in_simulated_outcome_mode
+test_guide_pick_part_stop = guide.test_a_stop_opens_the_gripper_and_the_event_log_records_it

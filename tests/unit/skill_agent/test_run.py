@@ -347,7 +347,7 @@ async def test_context_gives_drivers_elements_and_logged_writes(
     assert probe.methods(result.run_id) == ["pre_sense", "grasped gear-1", "post_sense"]
     assert kitting.wm.get_element(gear).properties["seenAt"] == 1.0
     writes = [e for e in core.events.history() if isinstance(e, WmWriteEntry)]
-    assert [w.run_id for w in writes] == [result.run_id]
+    assert [(w.run_id, w.step) for w in writes] == [(result.run_id, "execute")]  # ctx.transact
     assert simulated.success  # simulated: execute (and the device) are never touched
 
 
