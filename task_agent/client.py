@@ -23,7 +23,7 @@ from __future__ import annotations
 import logging
 import math
 import uuid
-from collections.abc import AsyncGenerator, AsyncIterator, Callable
+from collections.abc import AsyncGenerator, AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
 from typing import TypeVar
 
@@ -51,6 +51,7 @@ from .protocol import (
     OperatorRequest,
     PendingReply,
     PendingStep,
+    SeenAt,
     SubmitFile,
     SubmitGoal,
     TaskAccepted,
@@ -337,11 +338,19 @@ class OperatorClient:
         return reply.pending
 
     async def answer(
-        self, request_id: str, success: bool, message: str = "", author: str = ""
+        self,
+        request_id: str,
+        success: bool,
+        message: str = "",
+        author: str = "",
+        seen: Sequence[SeenAt] = (),
     ) -> str:
-        """Answer a pending request; RemoteTaskError (code ``unknown_request``) if there is
-        no such request. Returns the agent's confirmation."""
-        request = AnswerPending(id=request_id, success=success, message=message, author=author)
+        """Answer a pending request (``seen``: where the person sees elements);
+        RemoteTaskError (code ``unknown_request``, ``bad_request``) if there is no such
+        request or a sighting names no element. Returns the agent's confirmation."""
+        request = AnswerPending(
+            id=request_id, success=success, message=message, author=author, seen=list(seen)
+        )
         reply = await self._call(request)
         if not isinstance(reply, OkReply):
             raise TaskTransportError(f"the operator agent answered {type(reply).__name__}")

@@ -24,6 +24,8 @@ from __future__ import annotations
 import functools
 import logging
 import time
+from collections.abc import Sequence
+from typing import cast
 
 import anyio
 import msgspec
@@ -41,6 +43,7 @@ from wm_store.protocol import AddElement, Op, UpdateElement, Value
 from .client import operator_rpc_key
 from .discovery import OPERATOR_CLASS, Discovery
 from .execution_state import OPERATOR_NOTE
+from .operator_sightings import seen_text, sighting_ops
 from .protocol import (
     AnswerPending,
     ErrorReply,
@@ -49,6 +52,7 @@ from .protocol import (
     OperatorReply,
     PendingReply,
     PendingStep,
+    SeenAt,
     decode_operator_request,
     encode,
 )
@@ -69,7 +73,15 @@ class _Pending:
     def __init__(self, step: PendingStep) -> None:
         self.step = step
         self.answered = anyio.Event()
-        self.answer: tuple[bool, str] = (False, "")
+        self.answer = Answered(False)
+
+
+class Answered(msgspec.Struct, frozen=True):
+    """A person's answer to one request: done or not, what they said, what they saw."""
+
+    success: bool
+    message: str = ""
+    seen: tuple[SeenAt, ...] = ()
 
 
 class OperatorDesk:
@@ -83,9 +95,9 @@ class OperatorDesk:
     def pending(self) -> list[PendingStep]:
         return [p.step for p in self._pending.values()]
 
-    async def ask(self, ctx: SkillContext) -> tuple[bool, str]:
-        """Open a request for ``ctx``'s run and wait for the answer ``(success, message)``.
-        Cancelling (the run stopped) withdraws it."""
+    async def ask(self, ctx: SkillContext) -> Answered:
+        """Open a request for ``ctx``'s run and wait for the answer. Cancelling (the run
+        stopped) withdraws it."""
         self._count += 1
         params = dict(ctx.params)
         note = params.pop(OPERATOR_NOTE, "")
@@ -107,13 +119,19 @@ class OperatorDesk:
             del self._pending[step.id]
             self._wake()
 
-    def answer(self, request_id: str, success: bool, message: str = "") -> PendingStep:
+    def answer(
+        self,
+        request_id: str,
+        success: bool,
+        message: str = "",
+        seen: Sequence[SeenAt] = (),
+    ) -> PendingStep:
         """Answer a pending request. Raises KeyError (with the pending ids) if there is none."""
         pending = self._pending.get(request_id)
         if pending is None or pending.answered.is_set():
             have = ", ".join(self._pending) or "none"
             raise KeyError(f"no pending operator request {request_id!r} (pending: {have})")
-        pending.answer = (success, message)
+        pending.answer = Answered(success, message, tuple(seen))
         pending.answered.set()
         return pending.step
 
@@ -132,9 +150,15 @@ class OperatorSkill(Skill):
         self.desk = desk
 
     async def execute(self, ctx: SkillContext) -> None:
-        success, message = await self.desk.ask(ctx)
-        if not success:
+        answer = await self.desk.ask(ctx)
+        message = answer.message
+        if not answer.success:
             raise SkillFailure(f"the operator could not do it: {message or 'no reason given'}")
+        if answer.seen:
+            wm = cast(WmClient, ctx.wm)
+            await ctx.transact(sighting_ops(wm, ctx.agent, answer.seen))
+            where = ", ".join(seen_text(s) for s in answer.seen)
+            message = f"{message}; seen: {where}" if message else f"seen: {where}"
         await ctx.progress(f"done by the operator: {message or 'ok'}", step="operator")
 
 
@@ -209,9 +233,9 @@ class OperatorService:
         match request:
             case ListPending():
                 reply = PendingReply(agent=self.name, pending=self.desk.pending())
-            case AnswerPending(id=request_id, success=success, message=message):
+            case AnswerPending(id=request_id, success=success, message=message, seen=seen):
                 try:
-                    step = self.desk.answer(request_id, success, message)
+                    step = self.desk.answer(request_id, success, message, seen)
                 except KeyError as e:
                     return encode(ErrorReply(code=UNKNOWN_REQUEST, message=e.args[0])), False
                 verdict = "done" if success else "failed"

@@ -40,6 +40,7 @@ __all__ = [
     "Planned",
     "PlannedStep",
     "Replanning",
+    "SeenAt",
     "Sequence",
     "StepFinished",
     "StepProgress",
@@ -355,13 +356,28 @@ class ListPending(Struct, tag=True, tag_field="request", frozen=True, kw_only=Tr
     pass
 
 
+class SeenAt(Struct, frozen=True, kw_only=True):
+    """Where a person sees an element (FRIEND II: the user as a sensor when the machine's
+    sensors fail): the world position of its centre, m, and optionally its heading, rad."""
+
+    element: str
+    """Element id or label."""
+    position: tuple[float, float, float]
+    yaw: float | None = None
+    """None: keep the orientation the world model has."""
+    confidence: Annotated[float, Meta(ge=0, le=1)] = 0.9
+
+
 class AnswerPending(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
-    """The person's answer: the step is done (``success``) or cannot be done."""
+    """The person's answer: the step is done (``success``) or cannot be done. ``seen``: where
+    the person sees elements; written as pose observations by the operator (source: the
+    ``Operator`` element), which ``locate`` uses when no sensor sees the object."""
 
     id: str
     success: bool
     message: str = ""
     author: str = ""
+    seen: list[SeenAt] = []
 
 
 class PendingReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

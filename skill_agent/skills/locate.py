@@ -6,12 +6,20 @@ contributes one observation of its pose (source = the sensor's element id, with 
 detection's confidence), replacing older observations, and ``seenAt`` is stamped. If the
 object is now outside the element that holds it in the world model (it fell, someone moved
 it), its spatial parent becomes the smallest container or surface around where it was seen.
-Not seen by any sensor: the run fails (``execution``) and the world model is left as it was.
+Not seen by any sensor: if a person reported where the object is (an observation of its pose
+whose source is an ``Operator`` element, written when the operator answers a request with
+``skimesh operator --seen``; FRIEND II's user as the last sensor) less than
+:data:`OPERATOR_SIGHTING_AGE` seconds ago, that is where it is, and the run says so; otherwise
+the run fails (``execution``) and the world model is left as it was.
 """
 
 from __future__ import annotations
 
-from wm_store.vocab import Prop
+import time
+
+from wm_store.client import WmClient
+from wm_store.protocol import Observation
+from wm_store.vocab import Cls, Prop
 
 from ..errors import SkillFailure
 from ..protocol import HasPropertyCond, SkillDescription
@@ -20,7 +28,25 @@ from .params import OBJECT, PLATFORM, SENSOR
 from .sensing import containing, look, move_ops, observation_ops, sensors_of, still_inside
 from .support import element_id, wm_of
 
-__all__ = ["Locate", "locate_object"]
+__all__ = ["OPERATOR_SIGHTING_AGE", "Locate", "locate_object", "operator_sighting"]
+
+OPERATOR_SIGHTING_AGE = 300.0
+"""How long a person's report of where an object is stands in for the sensors, s."""
+
+
+def operator_sighting(wm: WmClient, element: str, now: float | None = None) -> Observation | None:
+    """The newest pose observation of ``element`` by an ``Operator`` element, if it is younger
+    than :data:`OPERATOR_SIGHTING_AGE` seconds."""
+    found = wm.get_element(element).observations.get(Prop.pose, [])
+    stamp = time.time() if now is None else now
+    best: Observation | None = None
+    for obs in found:
+        source = wm.find_element(obs.source)
+        if source is None or not wm.ontology.is_a(source.type, Cls.Operator):
+            continue
+        if stamp - obs.stamp <= OPERATOR_SIGHTING_AGE and (best is None or obs.stamp > best.stamp):
+            best = obs
+    return best
 
 
 async def locate_object(ctx: SkillContext, param: str = "object") -> None:
@@ -33,10 +59,18 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
         raise SkillFailure(f"{ctx.description.name}: no sensor bound to look for {target.id}")
     seen = await look(wm, target, sensors)
     if not seen:
-        raise SkillFailure(
-            f"{ctx.description.name}: {target.label or target.id} ({target.id}) is not seen by "
-            f"{sensors.names}"
+        told = operator_sighting(wm, target.id)
+        if told is None:
+            raise SkillFailure(
+                f"{ctx.description.name}: {target.label or target.id} ({target.id}) is not "
+                f"seen by {sensors.names}"
+            )
+        await ctx.progress(
+            f"{target.label or target.id} not seen by {sensors.names}; where the operator "
+            f"({told.source}) saw it {time.time() - told.stamp:.0f} s ago",
+            step="located",
         )
+        return
     ops = observation_ops(target.id, seen)
     holder = wm.get_parent(target.id)
     inside = holder is None or still_inside(wm, holder.id, seen[0].pose)

@@ -7,7 +7,9 @@ requests and answers them:
 - ``skimesh operator``: list them (on a terminal: answer them one by one as they come,
   ``s``/``success`` or ``f``/``failure``, optionally followed by a message; Ctrl-D ends);
 - ``skimesh operator --wait 30``: first wait up to 30 s for a request (scripts);
-- ``skimesh operator --answer ID success|failure [--message TEXT]``: answer one.
+- ``skimesh operator --answer ID success|failure [--message TEXT] [--seen LABEL=X,Y,Z]``:
+  answer one; ``--seen`` tells where you see an element (e.g. the meal box no camera found),
+  written to the world model as your observation.
 
 Exit codes: 0 done, 1 ``--wait`` saw no request in time, 4 errors (no operator agent, an
 unknown request id). Ctrl-C / SIGTERM ends it cleanly.
@@ -31,7 +33,7 @@ from meshlink.messages import Sample
 from meshlink.subscription import Subscription
 from task_agent.client import OperatorClient
 from task_agent.errors import TaskError
-from task_agent.protocol import PendingStep
+from task_agent.protocol import PendingStep, SeenAt
 
 from ..connect import mesh_session
 from ..runtime import run_service
@@ -51,13 +53,57 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_mesh_arguments(p)
-    p.add_argument("--timeout", type=float, default=5.0, help="request timeout in seconds")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--answer", nargs=2, metavar=("ID", "VERDICT"), help="success or failure")
-    p.add_argument("--message", default="", help="with --answer: what was done")
-    p.add_argument("--wait", type=float, metavar="S", help="wait up to S s for a request")
-    p.add_argument("-i", "--interactive", action="store_true", help="answer requests as they come")
-    p.add_argument("--agent", default="operator", help="the operator agent's name")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="seconds to wait for the operator agent to answer a request (default: 5)",
+    )
+    p.add_argument(
+        "--json", action="store_true", help="list the pending requests as one JSON array"
+    )
+    p.add_argument(
+        "--answer",
+        nargs=2,
+        metavar=("ID", "VERDICT"),
+        help="answer request ID (the [id] listed) with VERDICT success (the person did the "
+        "step: it counts as done) or failure (the step fails)",
+    )
+    p.add_argument(
+        "--message",
+        default="",
+        help="with --answer: what was done, or why not (in the task's events)",
+    )
+    p.add_argument(
+        "--seen",
+        action="append",
+        default=[],
+        type=seen_at,
+        metavar="LABEL=X,Y,Z[,YAW]",
+        help="with --answer: where you see an element (its centre, world metres; heading in "
+        "rad), e.g. MealBox-1=0.77,-0.40,0.78 when no camera finds it; repeatable. Written to "
+        "the world model as your observation, which `locate` uses when its sensors see nothing",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        metavar="S",
+        help="first wait up to S seconds for a request to come (exit 1 if none does)",
+    )
+    p.add_argument(
+        "-i",
+        "--interactive",
+        action="store_true",
+        help="answer requests as they come, one input line each (the default on a terminal)",
+    )
+    p.add_argument(
+        "--agent",
+        default="operator",
+        metavar="NAME",
+        help="the operator agent's name, as given to `skimesh task-agent --operator` "
+        "(default: operator)",
+    )
     p.set_defaults(func=_main)
 
 
@@ -67,7 +113,10 @@ def _main(args: argparse.Namespace) -> int:
             async with mesh_session(args) as mesh:
                 client = OperatorClient(mesh, timeout=args.timeout)
                 if args.answer:
-                    return await _answer(client, *args.answer, message=args.message)
+                    return await _answer(client, *args.answer, message=args.message, seen=args.seen)
+                if args.seen:
+                    print("error: --seen goes with --answer", file=sys.stderr)
+                    return EXIT_ERROR
                 interactive = args.interactive or (
                     sys.stdin.isatty() and not args.json and args.wait is None
                 )
@@ -106,11 +155,36 @@ def _line(step: PendingStep) -> str:
     return f"[{step.id}] {step.skill}({args})  waiting {age:.0f} s\n    {step.note}"
 
 
-async def _answer(client: OperatorClient, request_id: str, verdict: str, *, message: str) -> int:
+def seen_at(text: str) -> SeenAt:
+    """``LABEL=X,Y,Z[,YAW]`` -> :class:`SeenAt` (argparse type: a clear error otherwise)."""
+    label, sep, numbers = text.partition("=")
+    try:
+        values = [float(v) for v in numbers.split(",")] if sep else []
+    except ValueError:
+        values = []
+    if not label.strip() or len(values) not in (3, 4):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected LABEL=X,Y,Z or LABEL=X,Y,Z,YAW (metres, radians)"
+        )
+    x, y, z = values[:3]
+    return SeenAt(
+        element=label.strip(), position=(x, y, z), yaw=values[3] if len(values) == 4 else None
+    )
+
+
+async def _answer(
+    client: OperatorClient,
+    request_id: str,
+    verdict: str,
+    *,
+    message: str,
+    seen: list[SeenAt],
+) -> int:
     if verdict.lower() not in VERDICTS:
         print(f"error: the verdict is 'success' or 'failure', not {verdict!r}", file=sys.stderr)
         return EXIT_ERROR
-    print(await client.answer(request_id, VERDICTS[verdict.lower()], message, author="cli"))
+    success = VERDICTS[verdict.lower()]
+    print(await client.answer(request_id, success, message, author="cli", seen=seen))
     return 0
 
 

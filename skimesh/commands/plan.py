@@ -35,8 +35,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--goal", required=True, help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"'
     )
-    p.add_argument("--engine", choices=("kairos", "fast-downward"), default="kairos")
-    p.add_argument("--planner-timeout", type=float, default=30.0, metavar="S")
+    p.add_argument(
+        "--engine",
+        choices=("kairos", "fast-downward"),
+        default="kairos",
+        help="planner that turns the goal into steps: kairos (in-process, fastest; the "
+        "default) or fast-downward (a separate process per plan)",
+    )
+    p.add_argument(
+        "--planner-timeout",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="give up planning after S seconds (default: 30)",
+    )
     p.add_argument("--emit-pddl", type=Path, metavar="DIR", help="write domain.pddl + problem.pddl")
 
 

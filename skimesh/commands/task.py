@@ -9,7 +9,10 @@ brought to a safe state) before the command exits.
 
 Exit codes of ``submit`` and ``watch``: 0 succeeded, 1 failed, 2 unsolvable, 3 aborted,
 4 usage or other errors (bad goal, a task file that does not verify, no task agent); 130
-interrupted (the task was aborted). ``verify``: 0 verifies, 1 problems, 4 errors.
+interrupted (the task was aborted). ``verify``: 0 verifies, 1 problems, 4 errors. ``abort``:
+0 the task has ended, 4 errors (or still running after the service's wait). ``status``,
+``list`` and ``abort`` print JSON with ``--json`` (``abort``: the task's state plus the
+service's ``reply``).
 """
 
 from __future__ import annotations
@@ -72,9 +75,25 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "Ctrl-C / SIGTERM (running tasks are aborted, their runs stopped).",
     )
     add_mesh_arguments(agent)
-    agent.add_argument("--timeout", type=float, default=5.0, help="world-model timeout (s)")
-    agent.add_argument("--operator", default="operator", metavar="NAME", help="operator agent")
-    agent.add_argument("--no-operator", action="store_true", help="serve no operator agent")
+    agent.add_argument(
+        "--timeout",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="seconds to wait for the world-model store to answer (default: 5)",
+    )
+    agent.add_argument(
+        "--operator",
+        default="operator",
+        metavar="NAME",
+        help="name of the operator agent served here, which hands failed steps to a person "
+        "(default: operator)",
+    )
+    agent.add_argument(
+        "--no-operator",
+        action="store_true",
+        help="serve no operator agent (no step can fall back to a person)",
+    )
     agent.set_defaults(func=_serve)
 
     task = sub.add_parser("task", help="submit, follow, list and abort tasks")
@@ -90,21 +109,56 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     what = submit.add_mutually_exclusive_group(required=True)
     what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
     what.add_argument("--file", type=Path, help="a task file (TOML sequence/parallel blocks)")
-    submit.add_argument("--task-id", default="", help="default: a fresh t-<hex> id")
-    submit.add_argument("--engine", choices=("kairos", "fast-downward"), default="kairos")
-    submit.add_argument("--planner-timeout", type=float, default=30.0, metavar="S")
-    submit.add_argument("--max-replans", type=int, default=3, metavar="N")
-    submit.add_argument("--simulate", action="store_true", help="simulated outcomes for every run")
+    submit.add_argument(
+        "--task-id",
+        default="",
+        metavar="ID",
+        help="name the task (letters, digits, _ . -); default: a fresh t-<hex> id",
+    )
+    submit.add_argument(
+        "--engine",
+        choices=("kairos", "fast-downward"),
+        default="kairos",
+        help="planner that turns the goal into steps: kairos (in-process, fastest; the "
+        "default) or fast-downward (a separate process per plan); ignored with --file",
+    )
+    submit.add_argument(
+        "--planner-timeout",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="give up planning after S seconds (each plan and replan; default: 30); the task "
+        "then fails with the reason",
+    )
+    submit.add_argument(
+        "--max-replans",
+        type=int,
+        default=3,
+        metavar="N",
+        help="when a step fails (a condition, a skill error, a robot lost), plan again from "
+        "the world model at most N times before the task fails (default: 3; 0: never)",
+    )
+    submit.add_argument(
+        "--simulate",
+        action="store_true",
+        help="run every skill in simulated-outcome mode: no hardware moves, success is drawn "
+        "and its effects written to the world model",
+    )
     submit.add_argument(
         "--operator-fallback",
         nargs="?",
         const="*",
         default="",
         metavar="SKILLS",
-        help="ask the operator when a step fails: any step, or only steps of SKILLS "
-        "(comma-separated skill names, e.g. pick,place)",
+        help="when a step fails, hand it to a person through the operator agent (answered "
+        "with `skimesh operator`): any step, or only steps of SKILLS (comma-separated skill "
+        "names, e.g. pick,place); default: never, the goal is replanned instead",
     )
-    submit.add_argument("--detach", action="store_true", help="print the task id and return")
+    submit.add_argument(
+        "--detach",
+        action="store_true",
+        help="print the task id and return at once (follow it later with `task watch ID`)",
+    )
     submit.add_argument(
         "--emit-pddl", type=Path, metavar="DIR", help="also write the goal's PDDL into DIR"
     )
@@ -113,29 +167,41 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     submit.set_defaults(func=lambda a: _client(a, _submit))
 
     status = cmds.add_parser("status", help="one task's state")
-    status.add_argument("task_id")
+    status.add_argument("task_id", metavar="TASK_ID", help="the id `task submit` printed")
     _client_arguments(status)
     status.set_defaults(func=lambda a: _client(a, _status))
 
     listing = cmds.add_parser("list", help="the tasks the task agent knows")
-    listing.add_argument("--active", action="store_true", help="running tasks only")
+    listing.add_argument(
+        "--active", action="store_true", help="running tasks only (default: finished ones too)"
+    )
     _client_arguments(listing)
     listing.set_defaults(func=lambda a: _client(a, _list))
 
-    abort = cmds.add_parser("abort", help="stop every run of a task (robots to a safe state)")
-    abort.add_argument("task_id")
-    abort.add_argument("--reason", default="aborted from the command line")
+    abort = cmds.add_parser(
+        "abort",
+        help="stop every run of a task (robots to a safe state)",
+        description="Stop every run of a task; each robot is brought to a safe state. Returns "
+        "once the task ended. Exit codes: 0 the task has ended (aborted now, or it had ended "
+        "already), 4 errors (no such task, no task agent, still running after the wait).",
+    )
+    abort.add_argument("task_id", metavar="TASK_ID", help="the task to stop")
+    abort.add_argument(
+        "--reason",
+        default="aborted from the command line",
+        help="why, recorded as the task's final message",
+    )
     _client_arguments(abort)
     abort.set_defaults(func=lambda a: _client(a, _abort))
 
     watch = cmds.add_parser("watch", help="follow a running task (exit codes as for submit)")
-    watch.add_argument("task_id")
+    watch.add_argument("task_id", metavar="TASK_ID", help="the task to follow")
     _follow_arguments(watch)
     _client_arguments(watch)
     watch.set_defaults(func=lambda a: _client(a, _watch))
 
     verify = cmds.add_parser("verify", help="verify a task file against the world model")
-    verify.add_argument("file", type=Path)
+    verify.add_argument("file", type=Path, metavar="FILE", help="the task file (TOML) to check")
     _client_arguments(verify)
     verify.set_defaults(func=lambda a: _client(a, _verify))
 
@@ -153,14 +219,32 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
 
 
 def _follow_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--deadline", type=float, default=3600.0, help="give up after (s)")
-    p.add_argument("--no-progress", action="store_true", help="no StepProgress lines")
+    p.add_argument(
+        "--deadline",
+        type=float,
+        default=3600.0,
+        metavar="S",
+        help="stop following after S seconds (exit 4; the task goes on; default: 3600)",
+    )
+    p.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="leave out the progress lines within a step (keep started / finished)",
+    )
 
 
 def _client_arguments(p: argparse.ArgumentParser) -> None:
     add_mesh_arguments(p)
-    p.add_argument("--timeout", type=float, default=5.0, help="request timeout in seconds")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="seconds to wait for the task agent to answer a request (default: 5)",
+    )
+    p.add_argument(
+        "--json", action="store_true", help="machine-readable output (JSON, one per line)"
+    )
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
@@ -399,8 +483,19 @@ async def _list(args: argparse.Namespace) -> int:
 
 
 async def _abort(args: argparse.Namespace) -> int:
+    """The service answers once the task ended (or its wait ran out): the task's state after
+    the abort says which."""
     async with mesh_session(args) as mesh:
-        print(await TaskClient(mesh, timeout=args.timeout).abort(args.task_id, args.reason))
+        client = TaskClient(mesh, timeout=args.timeout)
+        reply = await client.abort(args.task_id, args.reason)
+        info = await client.status(args.task_id)
+    if args.json:
+        _print_json({**msgspec.to_builtins(info), "reply": reply})  # the task, and the answer
+    else:
+        print(reply)
+    if info.outcome == "running":
+        print(f"error: task {args.task_id} is still running after the abort", file=sys.stderr)
+        return EXIT_ERROR
     return 0
 
 

@@ -24,7 +24,7 @@ import textwrap
 import uuid
 from collections import Counter
 from collections.abc import AsyncIterator, Iterator
-from contextlib import asynccontextmanager
+from contextlib import asynccontextmanager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,7 +65,7 @@ TIME_SCALE = 0.05
 """A simulated run lasts ``duration * TIME_SCALE``: navigate 0.25 s, pick / place 0.2 s."""
 
 
-def agent_config(name: str, pick: float) -> str:
+def agent_config(name: str, pick: float, time_scale: float = TIME_SCALE) -> str:
     devices = "".join(
         f'\n[[devices]]\ntype = "{t}"\nlabel = "{name}-{label}"\n' for t, label in DEVICES
     )
@@ -84,7 +84,7 @@ def agent_config(name: str, pick: float) -> str:
 
         [simulation]
         probabilities = {{ navigate = 1.0, pick = {pick}, place = 1.0, serve = 1.0 }}
-        time_scale = {TIME_SCALE}
+        time_scale = {time_scale}
         seed = 1
         """
     )
@@ -100,9 +100,9 @@ class Site:
     def flags(self) -> list[str]:
         return ["--connect", self.endpoint, "--mesh", self.mesh]
 
-    def spawn_agent(self, name: str, pick: float = 1.0) -> Child:
+    def spawn_agent(self, name: str, pick: float = 1.0, time_scale: float = TIME_SCALE) -> Child:
         path = self.folder / f"{name}.toml"
-        path.write_text(agent_config(name, pick))
+        path.write_text(agent_config(name, pick, time_scale))
         args = ["-m", "skimesh", "agent", "--agent-config", str(path), "--simulate", *self.flags()]
         self.agents[name] = Child(args, name=f"agent {name}")
         return self.agents[name]
@@ -180,8 +180,14 @@ async def place_robot(wm: WmClient, name: str, where: str) -> None:
 
 @pytest.fixture(scope="module")
 def site(module_router: str, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
-    folder = tmp_path_factory.mktemp("tasks")
-    s = Site(module_router, f"it-{uuid.uuid4().hex[:10]}", folder)
+    with running_site(module_router, tmp_path_factory.mktemp("tasks")) as s:
+        yield s
+
+
+@contextmanager
+def running_site(endpoint: str, folder: Path) -> Iterator[Site]:
+    """A fresh mesh on ``endpoint``: the store, agents r1 and r2, the scene, the task agent."""
+    s = Site(endpoint, f"it-{uuid.uuid4().hex[:10]}", folder)
     store = start_store(s.endpoint, s.mesh, folder / "wm")
     task_agent: Child | None = None
     try:

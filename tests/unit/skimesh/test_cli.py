@@ -88,3 +88,18 @@ def test_an_error_without_a_message_is_still_described() -> None:
     assert "timed out" in describe_error(TimeoutError())
     assert describe_error(KeyError()) == "KeyError"
     assert describe_error(TimeoutError("store: no answer in 5 s")) == "store: no answer in 5 s"
+
+
+def test_the_operator_says_where_they_see_things() -> None:
+    """``skimesh operator --answer 3 success --seen MealBox-1=0.77,-0.4,0.78`` (repeatable,
+    with an optional heading); anything else is a usage error that shows the form."""
+    args = parse(
+        "operator", "--answer", "3", "success", "--seen", "MealBox-1=0.77,-0.4,0.78",
+        "--seen", "Tray-1=0.8,0.1,0.76,1.57",
+    )  # fmt: skip
+    first, second = args.seen
+    assert (first.element, first.position, first.yaw) == ("MealBox-1", (0.77, -0.4, 0.78), None)
+    assert (second.element, second.yaw) == ("Tray-1", 1.57)
+    for bad in ("MealBox-1", "MealBox-1=1,2", "=1,2,3", "MealBox-1=a,b,c"):
+        with pytest.raises(SystemExit):
+            parse("operator", "--answer", "3", "success", "--seen", bad)

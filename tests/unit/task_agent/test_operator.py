@@ -3,7 +3,8 @@ skills, and the executor handing a failed step to a person (in-process agents, n
 
 from __future__ import annotations
 
-from collections.abc import AsyncIterator
+import math
+from collections.abc import AsyncIterator, Sequence
 from contextlib import asynccontextmanager
 
 import anyio
@@ -24,6 +25,7 @@ from task_agent.protocol import (
     OkReply,
     PendingReply,
     Replanning,
+    SeenAt,
     StepFinished,
     StepStarted,
     TaskFile,
@@ -34,15 +36,17 @@ from task_agent.protocol import (
     Sequence as SequenceBlock,
 )
 from tests.assets.task_fleet import Fleet, fleet
-from wm_store.protocol import Value
+from wm_store.protocol import AddElement, Pose, Value
 
 
 class Person:
     """Answers every request that shows up on the desk, through operator/rpc's service."""
 
-    def __init__(self, desk: OperatorDesk, *, success: bool) -> None:
+    def __init__(
+        self, desk: OperatorDesk, *, success: bool, sightings: Sequence[SeenAt] = ()
+    ) -> None:
         self.service = OperatorService("operator", desk)
-        self.desk, self.success = desk, success
+        self.desk, self.success, self.sightings = desk, success, list(sightings)
         self.seen: list[str] = []
 
     def call(self, request: ListPending | AnswerPending) -> PendingReply | OkReply | ErrorReply:
@@ -55,18 +59,22 @@ class Person:
             assert isinstance(listed, PendingReply)
             for step in listed.pending:
                 self.seen.append(step.note)
-                answer = AnswerPending(id=step.id, success=self.success, message="by hand")
+                answer = AnswerPending(
+                    id=step.id, success=self.success, message="by hand", seen=self.sightings
+                )
                 assert isinstance(self.call(answer), OkReply)
             await self.desk.wait_changed()
 
 
 @asynccontextmanager
-async def with_operator(f: Fleet, *, success: bool = True) -> AsyncIterator[Person]:
+async def with_operator(
+    f: Fleet, *, success: bool = True, sightings: Sequence[SeenAt] = ()
+) -> AsyncIterator[Person]:
     desk = OperatorDesk()
     mirror = SkillMirror(f.discovery, desk)
     mirror.refresh()
     core = AgentCore(name="operator", wm=f.wm, skills=mirror.entries())
-    person = Person(desk, success=success)
+    person = Person(desk, success=success, sightings=sightings)
     async with anyio.create_task_group() as tg:
         await tg.start(core.run)
         f.runner.cores["operator"] = core
@@ -118,6 +126,26 @@ async def test_a_failed_step_is_done_by_the_operator() -> None:
         by_hand = next(e for e in f.events if isinstance(e, StepStarted) and e.agent == "operator")
         assert by_hand.params["object"] == f.parts[0]
         assert f.wm.query_relation(f.kits[0], "contain", f.parts[0])
+
+
+@pytest.mark.anyio
+async def test_what_the_operator_saw_is_written_as_their_observation() -> None:
+    """An answer with ``seen`` (``skimesh operator --seen``) writes a pose observation of the
+    element by the ``Operator`` element, beside the step's predicted effects."""
+    async with fleet(probabilities={"r1": {"pick": 0.0}}, start={"r1": 1}) as f:
+        reply = await f.wm.transact([AddElement(type="Operator", label="operator", ref="$op")])
+        part = f.wm.get_element(f.parts[0])
+        seen = SeenAt(element=part.label or part.id, position=(0.5, -0.25, 0.8), yaw=0.3)
+        goal = parse_goal(f"contain({f.kits[0]}, {f.parts[0]})", f.wm)
+        async with with_operator(f, sightings=[seen]):
+            done = await f.executor(operator_fallback=True).run_goal(goal)
+        assert done.outcome == "succeeded", done.message
+        [obs] = f.wm.get_element(f.parts[0]).observations["pose"]
+        assert obs.source == reply.ids["$op"] and obs.confidence == pytest.approx(0.9)
+        assert isinstance(obs.value, Pose) and obs.value.position.z == pytest.approx(0.8)
+        assert obs.value.orientation.z == pytest.approx(math.sin(0.15))
+        finished = [e for e in f.events if isinstance(e, StepFinished) and e.by_operator]
+        assert len(finished) == 1 and finished[0].success
 
 
 @pytest.mark.anyio
