@@ -279,8 +279,9 @@ async def serve_operator(
         data, ok = await agent_service.handle_bytes(query.payload or b"")
         return [Answer(key=keys.agent_rpc(name), payload=data, ok=ok)]
 
-    async def skills(_query: IncomingQuery) -> list[Answer]:
-        return [Answer(key=keys.agent_skills(name), payload=encode(agent_service.skills_reply()))]
+    async def skills(query: IncomingQuery) -> list[Answer]:
+        data, ok = agent_service.skills_bytes(query.payload or b"")  # as a robot agent's
+        return [Answer(key=keys.agent_skills(name), payload=data, ok=ok)]
 
     async def answer(query: IncomingQuery) -> list[Answer]:
         data, ok = operator.handle_bytes(query.payload or b"")

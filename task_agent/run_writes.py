@@ -3,9 +3,10 @@
 Each agent publishes its event log on ``agents/<agent>/events``
 (:class:`~skill_agent.event_feed.EventFeed`); :meth:`RunWrites.follow` reads every agent's, and
 the step scheduler watches the runs it starts. For a watched run it collects the revisions of
-every world-model transaction the run made: its committed effects, a skill's own
-``ctx.transact`` (an observation, a measured pose) and those of its sub-runs (composite skills:
-run ids ``<run>.<n>``). Each ``StepFinished`` carries them (``wm_writes``), and the executor
+every world-model transaction the run made: its committed effects, a skill's own writes
+(through ``ctx.transact`` or ``ctx.wm``: an observation, a measured pose, also in
+``on_preempt``) and those of its sub-runs (composite skills: run ids ``<run>.<n>``). Each
+``StepFinished`` carries them (``wm_writes``), and the executor
 waits for its replica to show the newest before it checks the goal or replans, also for writes
 that were no effects (``RunResult.effects_revision`` only names the effects' transaction).
 
