@@ -29,7 +29,9 @@ from .errors import ConflictError, ElementNotFoundError, TransportError
 from .ontology import Ontology
 from .protocol import (
     AddElement,
+    CardinalityReply,
     Change,
+    CheckCardinality,
     ClassDef,
     DefineClass,
     DefineTemplate,
@@ -216,6 +218,13 @@ class WmClient:
     async def info(self) -> InfoReply:
         reply = await self.request(Info())
         assert isinstance(reply, InfoReply)
+        return reply
+
+    async def check_cardinality(self, ids: Sequence[str] = ()) -> CardinalityReply:
+        """The store's report of minimum cardinalities not met, for ``ids`` (default: every
+        element). Maximums never need this: the store refuses a write that would exceed one."""
+        reply = await self.request(CheckCardinality(ids=list(ids)))
+        assert isinstance(reply, CardinalityReply)
         return reply
 
     async def fetch_elements(self, query: Query) -> list[Element]:

@@ -8,6 +8,7 @@ store; ``schema_version`` says which version wrote a message.
 Key space (prefix ``skimesh/<mesh>``):
 
 - ``wm/rpc``            queryable, one :data:`Request` in, one :data:`Reply` out
+- ``wm/query``          the same, read-only (every request but :class:`Transact`)
 - ``wm/changes``        publication, one :class:`Change` per committed transaction
 - ``wm/elements/<id>``  storage-style get: each element as JSON, for any Zenoh tool
 """
@@ -22,9 +23,12 @@ from msgspec import Meta, Struct
 __all__ = [
     "SCHEMA_VERSION",
     "AddElement",
+    "CardinalityReply",
+    "CardinalityViolation",
     "Change",
     "ChangesReply",
     "ChangesSince",
+    "CheckCardinality",
     "ClassDef",
     "ClassDefined",
     "Color",
@@ -431,8 +435,27 @@ class Info(Struct, tag=True, tag_field="request", kw_only=True):
     pass
 
 
+class CheckCardinality(Struct, tag=True, tag_field="request", kw_only=True):
+    """Which elements fall short of a minimum cardinality of their class (read-only).
+
+    Maximums are enforced on every write; minimums cannot be (a robot is added before its
+    arm), so the store reports them on request. ``ids``: check only these elements (default:
+    every element)."""
+
+    ids: list[str] = []
+
+
 Request: TypeAlias = (
-    GetElements | Resolve | Relations | Parent | Sparql | Transact | Snapshot | ChangesSince | Info
+    GetElements
+    | Resolve
+    | Relations
+    | Parent
+    | Sparql
+    | Transact
+    | Snapshot
+    | ChangesSince
+    | Info
+    | CheckCardinality
 )
 
 # --------------------------------------------------------------------------- replies
@@ -492,6 +515,31 @@ class InfoReply(Struct, tag=True, tag_field="reply", kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
+class CardinalityViolation(Struct, frozen=True, kw_only=True):
+    """``element`` (of class ``type``) has ``present`` ``relation`` triples (counting
+    sub-properties, to objects of ``on_class`` if given) where its class requires at least
+    ``required`` (a restriction declared on ``declared_on``, ``type`` or a superclass)."""
+
+    element: str
+    type: str
+    relation: str
+    required: int
+    present: int
+    on_class: str = ""
+    declared_on: str = ""
+    message: str = ""
+
+
+class CardinalityReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    """The answer to :class:`CheckCardinality`: every violation, in element id order;
+    ``checked`` is the number of elements the check covered."""
+
+    revision: int
+    checked: int
+    violations: list[CardinalityViolation] = []
+    schema_version: int = SCHEMA_VERSION
+
+
 class ErrorReply(Struct, tag=True, tag_field="reply", kw_only=True):
     """The request was refused; nothing changed. ``code`` is the error class's code."""
 
@@ -508,6 +556,7 @@ Reply: TypeAlias = (
     | SnapshotReply
     | ChangesReply
     | InfoReply
+    | CardinalityReply
     | ErrorReply
 )
 

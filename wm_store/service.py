@@ -13,9 +13,12 @@ import logging
 
 import msgspec
 
+from .cardinality_check import min_cardinality_violations
 from .errors import ElementNotFoundError, ProtocolError, WmError
 from .protocol import (
+    CardinalityReply,
     ChangesSince,
+    CheckCardinality,
     ElementsReply,
     ErrorReply,
     GetElements,
@@ -120,4 +123,9 @@ class WmService:
                 return store.changes_since(revision, limit)
             case Info():
                 return store.info()
+            case CheckCardinality(ids=ids):
+                checked, violations = min_cardinality_violations(state, store.ontology, ids)
+                return CardinalityReply(
+                    revision=state.revision, checked=checked, violations=violations
+                )
         raise ProtocolError(f"unsupported request {type(request).__name__}")  # pragma: no cover

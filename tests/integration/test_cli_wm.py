@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -58,6 +59,115 @@ def test_wm_client_commands(router_endpoint: str, mesh_name: str, tmp_path: Path
         assert info["durability"] == "group"
     finally:
         assert store.stop() == 0, store.log()
+
+
+OVEN = """\
+@prefix skm:  <https://skimesh.dev/ontology#> .
+@prefix skms: <https://skimesh.dev/scene#> .
+@prefix owl:  <http://www.w3.org/2002/07/owl#> .
+@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .
+
+skms:oven a owl:NamedIndividual , skm:Microwave ; rdfs:label "oven" .
+"""
+
+
+@pytest.fixture
+def sample_store(router_endpoint: str, mesh_name: str, tmp_path: Path) -> Iterator[list[str]]:
+    """A store process holding the sample scene (imported with --json at revision 1); yields
+    the mesh flags of a client command."""
+    store = start_store(router_endpoint, mesh_name, tmp_path / "wm")
+    common = ["--connect", router_endpoint, "--mesh", mesh_name]
+    try:
+        imported = skimesh("wm", *common, "import", "--json", str(SCENE))
+        assert imported.returncode == 0, imported.stderr
+        summary = json.loads(imported.stdout)
+        assert summary["revision"] == 1 and summary["elements"] == 14
+        assert summary["ids"]["Gear-1"] == "Gear-1", "names of the <Class>-<n> form are kept"
+        yield common
+    finally:
+        assert store.stop() == 0, store.log()
+
+
+def test_get_tree_sparql_and_export(sample_store: list[str], tmp_path: Path) -> None:
+    common = sample_store
+
+    got = skimesh("wm", *common, "get", "Gear-1", "KitBox-1")
+    assert got.returncode == 0, got.stderr
+    elements = json.loads(got.stdout)
+    assert [(e["id"], e["type"]) for e in elements] == [
+        ("Gear-1", "Gear"),
+        ("KitBox-1", "KitBox"),
+    ]
+    assert elements[0]["properties"]["mass"] == 0.12 and elements[0]["rev"] == 1
+    missing = skimesh("wm", *common, "get", "Gear-1", "Gear-99")
+    assert missing.returncode == 2 and missing.stdout == ""
+    assert "Gear-99" in missing.stderr
+
+    tree = json.loads(skimesh("wm", *common, "tree", "--json").stdout)
+    assert [(n["id"], n["relation"]) for n in tree] == [
+        ("MobileManipulator-1", None),
+        ("Station-1", None),
+    ]
+    shelf = tree[1]["children"][0]
+    assert (shelf["id"], shelf["type"], shelf["relation"]) == ("Shelf-1", "Shelf", "contain")
+    box = shelf["children"][0]
+    assert box["label"] == "gears and shafts"
+    assert [c["id"] for c in box["children"]] == ["Gear-1", "Gear-2", "Shaft-1", "Shaft-2"]
+    assert all(c["children"] == [] for c in box["children"])
+    sub = json.loads(skimesh("wm", *common, "tree", "PartBox-1", "--json").stdout)
+    assert sub == [{**box, "relation": None}], "a ROOT gives that branch alone"
+
+    question = "SELECT ?e ?m WHERE { ?e a skm:Gear ; skm:rev ?r ; skm:mass ?m } ORDER BY ?e"
+    table = skimesh("wm", *common, "sparql", question)
+    assert table.returncode == 0, table.stderr
+    assert table.stdout.splitlines() == ["e\tm", "Gear-1\t0.12", "Gear-2\t0.12"]
+    rows = json.loads(skimesh("wm", *common, "sparql", "--json", question).stdout)
+    assert rows == {
+        "revision": 1,
+        "variables": ["e", "m"],
+        "rows": [{"e": "Gear-1", "m": "0.12"}, {"e": "Gear-2", "m": "0.12"}],
+    }
+    update = skimesh("wm", *common, "sparql", "DELETE WHERE { ?s ?p ?o }")
+    assert update.returncode == 2 and "read-only" in update.stderr
+
+    exported = json.loads(skimesh("wm", *common, "export", "--json").stdout)
+    assert (exported["revision"], exported["elements"]) == (1, 14)
+    assert exported["file"] is None and "skms:Gear-1" in exported["turtle"]
+    assert exported["bytes"] == len(exported["turtle"].encode())
+    target = tmp_path / "scene.ttl"
+    to_file = skimesh("wm", *common, "export", "--json", str(target))
+    written = json.loads(to_file.stdout)
+    assert written["file"] == str(target) and "turtle" not in written
+    assert written["bytes"] == target.stat().st_size
+    assert written["relations"] == exported["relations"] == 14  # as in configs/scenes/sample.ttl
+
+
+def test_check_reports_unmet_minimum_cardinalities(sample_store: list[str], tmp_path: Path) -> None:
+    common = sample_store
+    clean = skimesh("wm", *common, "check")
+    assert clean.returncode == 0, clean.stderr + clean.stdout
+    assert "14 element(s) at revision 1: every one met" in clean.stdout
+
+    (tmp_path / "oven.ttl").write_text(OVEN)
+    oven = json.loads(skimesh("wm", *common, "import", "--json", str(tmp_path / "oven.ttl")).stdout)
+    assert oven == {"revision": 2, "elements": 1, "ids": {"oven": "Microwave-1"}}
+    short = skimesh("wm", *common, "check")
+    assert short.returncode == 1, short.stderr
+    assert short.stdout.splitlines()[0] == (
+        "Microwave-1: a Microwave should have exactly 1 'hasA' to a MicrowaveDoor "
+        "(declared on Microwave); it has 0"
+    )
+    report = skimesh("wm", *common, "check", "--json")
+    assert report.returncode == 1
+    found = json.loads(report.stdout)
+    assert (found["revision"], found["checked"]) == (2, 15)
+    assert [
+        (v["element"], v["relation"], v["on_class"], v["required"], v["present"])
+        for v in found["violations"]
+    ] == [("Microwave-1", "hasA", "MicrowaveDoor", 1, 0)]
+    narrowed = skimesh("wm", *common, "check", "--json", "Gear-1", "KitBox-1")
+    assert narrowed.returncode == 0
+    assert json.loads(narrowed.stdout) == {"revision": 2, "checked": 2, "violations": []}
 
 
 def test_no_store_fails_fast_with_advice(router_endpoint: str, mesh_name: str) -> None:

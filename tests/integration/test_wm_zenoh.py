@@ -2,12 +2,18 @@
 
 Covers: concurrent compare-and-set writers in two processes, replica convergence across
 processes, gap detection and resync, storage-style reads, SIGKILL of the store in the middle of
-a write burst and restart with every acknowledged transaction.
+a write burst and restart with every acknowledged transaction, classes and templates taught at
+run time reaching replicas in other processes and surviving a SIGKILL of the store; and that
+the world-model benchmark's smoke run (``benchmarks.wm --quick``) completes (timing figures
+are its business, not a test's: nothing here asserts one).
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
+import subprocess
+import sys
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -19,9 +25,9 @@ import pytest
 
 from meshlink import MeshConfig, open_mesh
 from wm_store import WmClient, ZenohTransport
-from wm_store.protocol import AddElement, Change, Element, encode
+from wm_store.protocol import AddElement, Change, Element, TemplateDef, encode
 
-from .procs import Child, start_store, start_worker
+from .procs import ROOT, Child, start_store, start_worker
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow]
 
@@ -206,3 +212,66 @@ def test_any_zenoh_tool_can_read_elements(
         anyio.run(main)
     finally:
         assert store.stop() == 0, store.log()
+
+
+def test_taught_class_reaches_other_processes_and_survives_a_store_kill(
+    router_endpoint: str, tmp_path: Path, mesh_name: str
+) -> None:
+    data = tmp_path / "wm"
+    store = start_store(router_endpoint, mesh_name, data)
+    followers = [start_worker("follow", router_endpoint, mesh_name, "early", 0)]
+    try:
+
+        async def teach(wm: WmClient) -> int:
+            await wm.define_class("Sprocket", "Gear")
+            small = TemplateDef(name="small-sprocket", type="Sprocket", properties={"mass": 0.05})
+            await wm.define_template(small)
+            await wm.add_element("Sprocket", "s1")
+            return wm.revision
+
+        revision = with_client(router_endpoint, mesh_name, teach)
+        taught = {
+            "classes": {"Sprocket": ["Sprocket", "Gear", "Part", "PhysicalObject"]},
+            "templates": {"small-sprocket": "Sprocket"},
+        }
+        followers[0].send(str(revision))
+        live = followers[0].expect(lambda m: "digest" in m)
+        assert live["revision"] == revision
+        assert {k: live[k] for k in taught} == taught, "the change extended a remote ontology"
+
+        store.kill()  # SIGKILL: no final snapshot, the restart replays the log
+        store = start_store(router_endpoint, mesh_name, data)
+        followers.append(start_worker("follow", router_endpoint, mesh_name, "late", 0))
+        followers[1].send(str(revision))
+        late = followers[1].expect(lambda m: "digest" in m)
+        assert {k: late[k] for k in taught} == taught, "the restarted store still knows them"
+        assert (late["revision"], late["digest"]) == (revision, live["digest"])
+    finally:
+        for f in followers:
+            f.stop()
+        store.stop()
+
+
+@pytest.mark.timeout(420)
+def test_benchmark_quick_run_completes(tmp_path: Path) -> None:
+    out = tmp_path / "wm.json"
+    command = [sys.executable, "-m", "benchmarks.wm", "--quick", "--json", str(out)]
+    command += ["--data-root", str(tmp_path)]
+    result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=400)
+    assert result.returncode == 0, result.stderr[-4000:]
+    header = "figure | value | baseline (same run) | ratio | target | met?"
+    assert header in " ".join(result.stdout.split()), result.stdout[:2000]
+    for figure in (
+        "durable tx/s, group commit, in-process, 16 writer(s)",
+        "durable tx/s, group, via Zenoh (WmClient), 16 writer(s)",
+        "change propagation p50 (store publish -> remote on_change)",
+        "resolve p50, 10k elements: label (unique)",
+    ):
+        assert figure in result.stdout
+    results = json.loads(out.read_text())
+    assert results["plan"]["rounds"] == 1, "the quick plan ran"
+    assert results["details"]["elements"] == 10_000
+    assert [q["agree"] for q in results["details"]["resolve"]] == [True, True, True], (
+        "resolve and SPARQL give the same answers"
+    )
+    assert list(tmp_path.iterdir()) == [out], "the benchmark removed its data directories"

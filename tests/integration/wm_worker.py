@@ -5,8 +5,11 @@ Modes:
          ``counter``; retries on conflict; prints ``{"conflicts": n, "digest": ...}`` at the end.
   burst  adds elements labelled ``<name>-<i>`` with txn ids, printing ``{"ack": label}`` after each
          acknowledged transaction; stops quietly when the store goes away.
+  follow writes nothing: only keeps its replica.
 Then each line read on stdin is a revision: the worker waits until its replica reaches it and
-prints ``{"digest": sha256 of its replica, "revision": r}``; it exits at end of input.
+prints ``{"digest": sha256 of its replica, "revision": r, "classes": {class: [superclasses]},
+"templates": {template: class}}`` (classes and templates taught at run time, as its replica's
+ontology knows them); it exits at end of input.
 Every line on stdout is one JSON object; logs go to stderr.
 """
 
@@ -74,17 +77,27 @@ async def main(args: argparse.Namespace) -> None:
         emit({"ready": wm.revision})
         if args.mode == "cas":
             await cas(wm, args.count)
-        else:
+        elif args.mode == "burst":
             await burst(wm, args.name, args.count)
         # Then answer digest requests: each stdin line is a revision to reach first.
         while line := await anyio.to_thread.run_sync(sys.stdin.readline):
             await wm.wait_for_revision(int(line))
-            emit({"digest": digest(wm), "revision": wm.revision})
+            onto = wm.ontology
+            classes = {c.name: list(onto.superclasses(c.name)) for c in onto.extended_classes}
+            templates = {t.name: t.type for t in onto.extended_templates}
+            emit(
+                {
+                    "digest": digest(wm),
+                    "revision": wm.revision,
+                    "classes": classes,
+                    "templates": templates,
+                }
+            )
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser()
-    parser.add_argument("mode", choices=("cas", "burst"))
+    parser.add_argument("mode", choices=("cas", "burst", "follow"))
     parser.add_argument("--connect", required=True)
     parser.add_argument("--mesh", required=True)
     parser.add_argument("--name", default="w")
