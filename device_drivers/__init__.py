@@ -38,6 +38,7 @@ from device_drivers.interfaces import GripperState as GripperState
 from device_drivers.interfaces import MobileBase as MobileBase
 from device_drivers.interfaces import ObjectSensor as ObjectSensor
 from device_drivers.interfaces import ProgressCallback as ProgressCallback
+from device_drivers.interfaces import Twist2D as Twist2D
 from device_drivers.interfaces import WorldPose as WorldPose
 from device_drivers.placement import object_centres as object_centres
 from device_drivers.placement import resolve_placements as resolve_placements
@@ -84,6 +85,7 @@ __all__: list[str] = [
     "Scenario",
     "ScenarioError",
     "SimulationDivergedError",
+    "Twist2D",
     "UnknownElementError",
     "UnreachableError",
     "WorldPose",

@@ -33,6 +33,7 @@ from device_drivers.protocol import (
     OpenGripper,
     Press,
     SetDoor,
+    SetVelocity,
 )
 from device_drivers.robot_spec import Pose2D
 from device_drivers.world import SimWorld
@@ -115,6 +116,12 @@ class SimBase(_SimDevice):
         self, target: Pose2D, *, speed: float = 0.5, progress: ProgressCallback | None = None
     ) -> None:
         await self._world.execute(self._key, GoTo(target, speed), progress)
+
+    async def set_velocity(
+        self, vx: float, vy: float, wz: float, *, duration: float | None = None
+    ) -> None:
+        """See :meth:`device_drivers.interfaces.MobileBase.set_velocity`."""
+        await self._world.execute(self._key, SetVelocity(vx, vy, wz, duration))
 
 
 class SimSensor(_SimDevice):

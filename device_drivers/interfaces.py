@@ -37,6 +37,7 @@ __all__ = [
     "MobileBase",
     "ObjectSensor",
     "ProgressCallback",
+    "Twist2D",
     "WorldPose",
 ]
 
@@ -71,9 +72,21 @@ class GripperState(Struct, frozen=True, kw_only=True):
     moving: bool = False
 
 
+class Twist2D(Struct, frozen=True):
+    """A planar velocity in the **base frame**: ``vx`` forward, ``vy`` to the left (m/s),
+    ``wz`` yaw rate about +z (rad/s, counter-clockwise)."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    wz: float = 0.0
+
+
 class BaseState(Struct, frozen=True, kw_only=True):
     pose: Pose2D
     moving: bool = False
+    velocity: Twist2D = Twist2D()
+    """The base's measured velocity, in its own frame (see :class:`Twist2D`), rounded to
+    1 mm/s and 1 mrad/s."""
 
 
 class Detection(Struct, frozen=True, kw_only=True):
@@ -159,6 +172,21 @@ class MobileBase(Device, Protocol):
     ) -> None:
         """Drive to ``target`` along an obstacle-free path; raises CollisionError if the path is
         blocked."""
+        ...
+
+    async def set_velocity(
+        self, vx: float, vy: float, wz: float, *, duration: float | None = None
+    ) -> None:
+        """Drive at the twist ``vx``, ``vy`` (m/s), ``wz`` (rad/s) in the **base frame**,
+        clamped to the base's speed, yaw-rate and acceleration limits.
+
+        Returns once the base has come to rest ``duration`` seconds (simulated) after the
+        start; with ``duration=None`` it drives until :meth:`stop`, which ends it normally.
+        Another ``set_velocity`` replaces the twist (the earlier call returns then).
+        Cancelling the call stops the base. Raises DeviceBusyError while a ``go_to`` (or a
+        whole-body arm motion) drives the base, CollisionError (the base halted first) when
+        its footprint would hit an obstacle, MotionStoppedError when ``stop()`` cuts a
+        ``duration`` short, CommandError for a value that is not finite."""
         ...
 
 

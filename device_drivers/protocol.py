@@ -60,6 +60,7 @@ __all__ = [
     "Reply",
     "Request",
     "SetDoor",
+    "SetVelocity",
     "StateMessage",
     "Stop",
     "decode_reply",
@@ -118,6 +119,16 @@ class GoTo(_Cmd, tag="go_to", frozen=True):
     speed: Annotated[float, Meta(gt=0, le=3)] = 0.5
 
 
+class SetVelocity(_Cmd, tag="set_velocity", frozen=True):
+    """A base: drive at this twist (base frame, m/s and rad/s) for ``duration`` s, or until
+    stopped when None. Any finite value is accepted: the base clamps it to its own limits."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    wz: float = 0.0
+    duration: Seconds | None = None
+
+
 class Detect(_Cmd, tag="detect", frozen=True):
     pass
 
@@ -144,6 +155,7 @@ Command: TypeAlias = (
     | OpenGripper
     | CloseGripper
     | GoTo
+    | SetVelocity
     | Detect
     | SetDoor
     | Heat

@@ -179,6 +179,9 @@ async def _base(
     if isinstance(cmd, p.GoTo):
         await base.go_to(cmd.target, speed=cmd.speed, progress=report)
         return p.Done()
+    if isinstance(cmd, p.SetVelocity):
+        await base.set_velocity(cmd.vx, cmd.vy, cmd.wz, duration=cmd.duration)
+        return p.Done()
     return None
 
 

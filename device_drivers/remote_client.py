@@ -195,6 +195,18 @@ class RemoteBase(RemoteDevice):
     ) -> None:
         await self._call(p.GoTo(target, speed), progress=progress)
 
+    async def set_velocity(
+        self, vx: float, vy: float, wz: float, *, duration: float | None = None
+    ) -> None:
+        """As in-process; an open-ended call gives up after ``motion_timeout`` s, stopping
+        the base first (a base nobody waits for must not drive on)."""
+        try:
+            await self._call(p.SetVelocity(vx, vy, wz, duration))
+        except DeviceUnavailableError:
+            with anyio.move_on_after(self.timeout), contextlib.suppress(DeviceError):
+                await self._send(p.Request(command=p.Stop()), self.timeout)
+            raise
+
 
 class RemoteSensor(RemoteDevice):
     async def detect(self) -> list[Detection]:

@@ -147,6 +147,13 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
     base_height: Length = 0.35
     """Height of the deck (top of the base) above the floor, m."""
     base_mass: Mass = 40.0
+    base_max_speed: Annotated[float, Meta(gt=0, le=5)] = 1.0
+    """Fastest linear speed a velocity command (``MobileBase.set_velocity``) drives at, m/s."""
+    base_max_yaw_rate: Annotated[float, Meta(gt=0, le=10)] = 1.0
+    """Fastest turn of a velocity command, rad/s."""
+    base_max_acceleration: Annotated[float, Meta(gt=0, le=20)] = 1.0
+    """Linear acceleration of a velocity command, m/s² (the yaw rate ramps over the same
+    time: it reaches its maximum when the speed reaches its own)."""
     arm_dof: Literal[6, 7] = 6
     arm_mount_x: Annotated[float, Meta(ge=-5, le=5)] = 0.17
     """Arm mount on the deck, along the base x axis from the base centre, m."""

@@ -3,9 +3,12 @@ device interfaces (``device_drivers.interfaces``), plus grasp planning.
 
 Every motion primitive is cancellable (cancellation stops the device, then propagates),
 reports progress (fraction 0..1) through an optional callback, and fails with the device
-layer's typed errors, re-exported here: :class:`UnreachableError`, :class:`CollisionError`,
-:class:`MotionTimeoutError`, :class:`GraspLostError` (all :class:`MotionError`; IK failures
-are :class:`~device_drivers.errors.IKError`). Frames: world; units: SI.
+layer's typed errors, re-exported here: :class:`CollisionError`, :class:`MotionTimeoutError`
+and :class:`GraspLostError` (each a :class:`MotionError`), and :class:`UnreachableError`,
+which derives from :class:`~device_drivers.errors.IKError`, *not* from :class:`MotionError`
+(the IK check raises it before anything moves; a straight move that meets it part-way is held
+by the driver). Catch :class:`~device_drivers.errors.DeviceError` for both kinds. Frames:
+world; units: SI.
 
 =====================  =======================================================================
 module                 contents
@@ -13,8 +16,9 @@ module                 contents
 ``supervise``          the deadline / cancellation / safe-stop wrapper every primitive uses
 ``arm``                move_joints, move_to, move_cartesian, approach, retreat, look_at
 ``gripper``            open_gripper, close_gripper (returns whether something is held), release
-``base``               navigate_to, face
-``grasp``              plan_grasp (graspPose / graspWidth or top-down), release_pose, free_spot
+``base``               navigate_to, face, drive (a velocity)
+``grasp``              plan_grasp (graspPose / graspWidth or top-down), release_pose, free_spot,
+                       free_spots (in a container), surface_spots (on a surface)
 ``poses``              quaternion and pose helpers shared with the world model's reasoner
 =====================  =======================================================================
 """
@@ -31,6 +35,7 @@ from .arm import move_cartesian as move_cartesian
 from .arm import move_joints as move_joints
 from .arm import move_to as move_to
 from .arm import retreat as retreat
+from .base import drive as drive
 from .base import face as face
 from .base import navigate_to as navigate_to
 from .grasp import Grasp as Grasp
@@ -42,6 +47,7 @@ from .grasp import free_spot as free_spot
 from .grasp import free_spots as free_spots
 from .grasp import plan_grasp as plan_grasp
 from .grasp import release_pose as release_pose
+from .grasp import surface_spots as surface_spots
 from .gripper import close_gripper as close_gripper
 from .gripper import open_gripper as open_gripper
 from .gripper import release as release
@@ -62,6 +68,7 @@ __all__ = [
     "UnreachableError",
     "approach",
     "close_gripper",
+    "drive",
     "extents",
     "face",
     "footprint_radius",
@@ -80,4 +87,5 @@ __all__ = [
     "retreat",
     "sub_progress",
     "supervise",
+    "surface_spots",
 ]

@@ -1,8 +1,9 @@
-"""Mobile-base primitives: drive to a planar pose, turn to face a point. Cancellable like every
-primitive (cancellation halts the base, then propagates). Frames and units: world frame,
-metres, radians (yaw about +z, 0 = facing +x), speeds in m/s. Path planning around furniture
-happens in the base driver, which raises :class:`~device_drivers.errors.CollisionError` when
-no free path exists."""
+"""Mobile-base primitives: drive to a planar pose, turn to face a point, drive at a velocity.
+Cancellable like every primitive (cancellation halts the base, then propagates). Frames and
+units: world frame, metres, radians (yaw about +z, 0 = facing +x), speeds in m/s; a velocity
+(:func:`drive`) is a twist in the *base* frame. Path planning around furniture happens in the
+base driver, which raises :class:`~device_drivers.errors.CollisionError` when no free path
+exists (or, driving at a velocity, when the base would hit an obstacle)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from device_drivers.robot_spec import Pose2D
 from .poses import Vec3
 from .supervise import supervise
 
-__all__ = ["face", "navigate_to"]
+__all__ = ["drive", "face", "navigate_to"]
 
 
 async def navigate_to(
@@ -50,3 +51,26 @@ async def face(
     return await navigate_to(
         base, Pose2D(here.x, here.y, yaw), speed=speed, progress=progress, timeout=timeout
     )
+
+
+async def drive(
+    base: MobileBase,
+    vx: float,
+    vy: float,
+    wz: float,
+    *,
+    duration: float | None = None,
+    timeout: float | None = None,
+) -> Pose2D:
+    """Drive at the twist ``vx``, ``vy`` (m/s), ``wz`` (rad/s) in the base frame (x forward,
+    y left), clamped to the base's limits, for ``duration`` seconds of the device's clock
+    (simulated time in the simulation). None: until the base is stopped (by its ``stop()``,
+    by cancelling this call, or by ``timeout`` wall-clock seconds, which halts it and raises
+    :class:`~device_drivers.errors.MotionTimeoutError`). Returns the pose reached."""
+    await supervise(
+        base,
+        f"{base.name}: drive at ({vx:.2f}, {vy:.2f}, {wz:.2f})",
+        lambda: base.set_velocity(vx, vy, wz, duration=duration),
+        timeout=timeout,
+    )
+    return (await base.state()).pose

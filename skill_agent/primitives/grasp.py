@@ -17,7 +17,8 @@ its ``size`` is a ``SizeCuboid`` (x, y, z), ``SizeCylinder`` (radius, height alo
   bottom, so the pads never touch the surface it stands on.
 
 ``graspWidth`` (the opening the object needs) is used when given, else derived from the size.
-:func:`release_pose` and :func:`free_spot` plan where a held object goes down.
+:func:`release_pose` and :func:`free_spot` / :func:`free_spots` (inside a container) or
+:func:`surface_spots` (on top of a surface) plan where a held object goes down.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ __all__ = [
     "free_spots",
     "plan_grasp",
     "release_pose",
+    "surface_spots",
 ]
 
 _UPRIGHT = math.cos(math.radians(20.0))
@@ -238,20 +240,59 @@ def free_spots(
     radius)`` in ``occupied`` by ``gap``; nearest the centre first. ``container`` is the
     world pose of the container's centre, ``ext`` its outside extents."""
     hx, hy = ext[0] / 2 - wall - radius - gap / 2, ext[1] / 2 - wall - radius - gap / 2
+    return _spots(container, hx, hy, -ext[2] / 2 + wall, radius, occupied, gap, None)
+
+
+def surface_spots(
+    surface: Transform,
+    ext: Vec3,
+    radius: float,
+    occupied: Sequence[tuple[Vec3, float]] = (),
+    *,
+    edge: float = 0.03,
+    gap: float = 0.012,
+    near: Vec3 | None = None,
+) -> list[Vec3]:
+    """Free points on the *top* of a surface (a shelf board, a table; world, m) for an object
+    of footprint ``radius``: on a grid over the top, ``edge`` m in from its edges and away
+    from each ``(position, radius)`` in ``occupied`` (what stands on it: boxes, parts) by
+    ``gap``. Nearest ``near`` first (a world point, compared on the floor plane: the robot,
+    so the most reachable spots come first), else nearest the centre. ``surface`` is the
+    world pose of the surface's centre, ``ext`` its extents (the top is at ``+ext[2] / 2``)."""
+    hx, hy = ext[0] / 2 - edge - radius, ext[1] / 2 - edge - radius
+    return _spots(surface, hx, hy, ext[2] / 2, radius, occupied, gap, near)
+
+
+def _spots(
+    frame: Transform,
+    hx: float,
+    hy: float,
+    z: float,
+    radius: float,
+    occupied: Sequence[tuple[Vec3, float]],
+    gap: float,
+    near: Vec3 | None,
+) -> list[Vec3]:
+    """Grid points ``(lx, ly, z)`` of ``frame`` within ``|lx| <= hx``, ``|ly| <= hy``, clear of
+    ``occupied``, as world points sorted by distance to ``near`` (or to the frame's centre)."""
     if hx < 0 or hy < 0:
         return []
     step = 2 * radius + gap
-    floor = -ext[2] / 2 + wall
     found: list[tuple[float, Vec3]] = []
     for lx in _grid(hx, step):
         for ly in _grid(hy, step):
-            point = container.apply((lx, ly, floor))
+            point = frame.apply((lx, ly, z))
             clear = all(
                 math.hypot(point[0] - p[0], point[1] - p[1]) >= radius + r + gap
                 for p, r in occupied
             )
             if clear:
-                found.append((math.hypot(lx, ly), point))
+                key = (
+                    math.hypot(lx, ly)
+                    if near is None
+                    else math.hypot(point[0] - near[0], point[1] - near[1])
+                )
+                found.append((key, point))
     return [point for _, point in sorted(found, key=lambda f: f[0])]
 
 

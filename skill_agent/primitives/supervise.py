@@ -8,8 +8,13 @@ whenever the call does not complete normally:
   the cancellation propagates;
 - **too slow** (``timeout`` seconds of wall-clock time): stopped likewise, then
   :class:`~device_drivers.errors.MotionTimeoutError`;
-- **failed** (a :class:`~device_drivers.errors.MotionError`: unreachable, collision, grasp
-  lost, device timeout): stopped (idempotent; the driver already halted), the error re-raised.
+- **failed** (a :class:`~device_drivers.errors.MotionError`: collision, grasp lost, device
+  timeout): stopped (idempotent; the driver already halted), the error re-raised.
+- **refused** (:class:`~device_drivers.errors.UnreachableError`, an IK error, not a
+  ``MotionError``; ``CommandError``, ``DeviceBusyError``): re-raised without a stop. The IK
+  check refuses a target before anything moves (a straight move that meets it part-way is
+  held by the driver itself); a stop would reset the held set-points to where the arm sags
+  to, or end the motion the device is busy with.
 
 Progress callbacks receive the fraction of a motion done, 0..1; :func:`sub_progress` maps a
 step of a compound primitive into its share of the whole.

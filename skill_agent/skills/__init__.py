@@ -1,6 +1,6 @@
-"""The standard skill library: navigate, locate, pick / take_out, place / serve / put_in, door
-skills for an arm and for a smart appliance, drawer skills for an arm, heat, operate (an
-appliance's buttons).
+"""The standard skill library: navigate, locate, pick / take_out, place / place_on / serve /
+put_in, door skills for an arm and for a smart appliance, drawer skills for an arm, heat,
+operate (an appliance's buttons).
 
 Each skill is a :class:`~skill_agent.skill.Skill` subclass with a full description (parameters
 typed by ontology classes, pre / hold / post conditions in the SkiROS style), sensing in
@@ -14,7 +14,8 @@ module             skills (name: class)                             used by
 ``navigate``       navigate: :class:`Navigate`                      mobile robots
 ``locate``         locate: :class:`Locate`                          robots with a sensor
 ``pick``           pick: :class:`Pick`, take_out: :class:`TakeOut`  arm robots
-``place``          place: :class:`Place`                            arm robots
+``place``          place: :class:`Place`, place_on (on a surface):  arm robots
+                   :class:`PlaceOn`
 ``serve``          serve: :class:`Serve`, put_in: :class:`PutIn`    arm robots
 ``doors``          open_door / close_door: :class:`ArmOpenDoor`,    arm robots (unpowered doors)
                    :class:`ArmCloseDoor`
@@ -47,6 +48,7 @@ from .operate import OperateStop as OperateStop
 from .pick import Pick as Pick
 from .pick import TakeOut as TakeOut
 from .place import Place as Place
+from .place import PlaceOn as PlaceOn
 from .serve import PutIn as PutIn
 from .serve import Serve as Serve
 
@@ -67,6 +69,7 @@ __all__ = [
     "OperateStop",
     "Pick",
     "Place",
+    "PlaceOn",
     "PutIn",
     "Serve",
     "TakeOut",
@@ -79,6 +82,7 @@ ALL_SKILLS = (
     Pick,
     TakeOut,
     Place,
+    PlaceOn,
     Serve,
     PutIn,
     ArmOpenDoor,

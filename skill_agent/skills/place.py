@@ -1,26 +1,39 @@
-"""``place``: put the held object into a container the robot carries (e.g. its kit box). Its
-variants ``serve`` (onto a tray) and ``put_in`` (into an appliance) are in
-:mod:`skill_agent.skills.serve`.
+"""``place``: put the held object into a container the robot carries (e.g. its kit box);
+``place_on`` (:class:`PlaceOn`, the same skill type): put it down on a surface at the robot's
+location (a shelf board, a table). Its variants ``serve`` (onto a tray) and ``put_in`` (into
+an appliance) are in :mod:`skill_agent.skills.serve`.
 
-``execute`` first checks the gripper still holds the object, finds free spots on the target's
-floor (:func:`~skill_agent.primitives.free_spots`, away from what the world model says is
-already there), carries the object through the arm's home posture, computes where the tcp
+``execute`` first checks the gripper still holds the object, finds free spots on the target
+(in a container: on its floor, :func:`~skill_agent.primitives.free_spots`, nearest its centre
+first; on a surface: on its top, :func:`~skill_agent.primitives.surface_spots`, ``edge`` m in
+from its edges, nearest the robot first; both away from what the world model says is already
+there), carries the object through the arm's home posture, computes where the tcp
 must go for the object's bottom to be ``drop`` m above a spot
 (:func:`~skill_agent.primitives.release_pose`, from the grasp the object was picked with),
 approaches (the next spot if one is out of reach, or if the arm has no collision-free joint
 move to it), releases (opening just wider than the object) and retreats. An arm
 that cannot reach all the way down (a kit box low behind its shoulder) releases where it
-stopped if the object is already below the target's rim, straight above the spot.
+stopped if the object is already below the target's rim (a surface: its top), straight above
+the spot.
 
 ``post_sense`` is the honest check, with the ground truth the sensors report:
 
 - the object was lost on the way (the arm reports it, or the gripper holds nothing before the
   release): the run fails, "dropped"; the world model is corrected (the gripper no longer
   holds it; if a sensor sees it, its pose and the container or surface it fell into);
-- after the release a sensor sees the object outside the target: the run fails likewise;
-- a sensor sees it inside: its pose is written, the prediction ``contain(target, object)`` is
-  committed. When no sensor sees the target's inside (e.g. a kit box on the robot's own deck
-  behind its camera) the release pose is trusted and the progress says so.
+- after the release a sensor sees the object outside the target (for a surface: not on its
+  top, or inside something standing on it, such as a part box): the run fails likewise;
+- a sensor sees it there: its pose is written, the prediction ``contain(target, object)`` is
+  committed (the world model's scene tree puts what rests on a surface under it, as a shelf
+  contains its boxes). When no sensor sees the target (e.g. a kit box on the robot's own
+  deck behind its camera) the release pose is trusted and the progress says so.
+
+Why two skills, not one ``place`` with a container-or-surface target: a planner needs one
+parameter class and one set of pre-conditions per action. A carried container needs
+``contain(robot, container)``; a surface needs the robot ``at`` the location that contains
+it; a disjunction of the two would be run-time only, and the planner could no longer use
+``place`` at all. Both share this class's execution and checks (the target's class chooses
+floor or top).
 """
 
 from __future__ import annotations
@@ -46,6 +59,7 @@ from ..primitives import (
     release,
     release_pose,
     retreat,
+    surface_spots,
 )
 from ..primitives.poses import Vec3, to_transform
 from ..protocol import ParamSpec, SkillDescription
@@ -58,6 +72,7 @@ from .params import (
     PLATFORM,
     ROBOT,
     SENSOR,
+    at,
     contains,
     not_full,
     offline,
@@ -65,7 +80,7 @@ from .params import (
 from .sensing import containing, lies_in, look, move_ops, observation_ops, sensors_of
 from .support import element_id, failure, float_param, geometry, tracked, wm_of, world_transform
 
-__all__ = ["DEVICES", "RIM_SLACK", "SPOTS_TRIED", "TUNING", "Place"]
+__all__ = ["DEVICES", "RIM_SLACK", "SPOTS_TRIED", "TUNING", "Place", "PlaceOn", "is_surface"]
 
 DEVICES = [ROBOT, ARM, GRIPPER, SENSOR, PLATFORM]
 SPOTS_TRIED = 4
@@ -131,13 +146,15 @@ class Place(Skill):
             )
         except NoGraspError as exc:
             raise SkillFailure(f"place: cannot tell how {obj.label} is held: {exc}") from exc
-        spots = free_spots(
-            box_pose,
-            box_ext,
-            footprint_radius(obj.size),
-            _occupied(wm, target_id, obj.element.id),
-            wall=float_param(ctx, "wall"),
-        )[:SPOTS_TRIED]
+        radius, occupied = footprint_radius(obj.size), _occupied(wm, target_id, obj.element.id)
+        if is_surface(wm, target_id):
+            robot = world_transform(wm, element_id(ctx, "robot"))
+            near = robot.translation if robot is not None else (tcp_now.x, tcp_now.y, tcp_now.z)
+            edge = float_param(ctx, "edge")
+            spots = surface_spots(box_pose, box_ext, radius, occupied, edge=edge, near=near)
+        else:
+            spots = free_spots(box_pose, box_ext, radius, occupied, wall=float_param(ctx, "wall"))
+        spots = spots[:SPOTS_TRIED]
         if not spots:
             raise SkillFailure(f"place: no free spot for {obj.label} in {target.label}")
         drop = float_param(ctx, "drop")
@@ -233,6 +250,8 @@ class Place(Skill):
             return
         height = (extents(wm.get_element(obj).properties.get(Prop.size)) or (0.0, 0.0, 0.0))[2]
         inside = bool(seen) and lies_in(wm, target, seen[0].pose, height)
+        if inside and is_surface(wm, target):  # on its top, not in a box standing there
+            inside = containing(wm, seen[0].pose, exclude=[obj]) in (None, target)
         if not self.dropped and inside:
             await wm.transact(observation_ops(obj, seen))
             await ctx.progress(f"{label} seen in {wm.get_element(target).label}")
@@ -257,8 +276,54 @@ class Place(Skill):
         await make_safe(ctx)
 
 
+class PlaceOn(Place):
+    """Put the held object down on a surface at the robot's location.
+
+    The surface is tied to where the robot stands by ``contain(location, surface)`` (a
+    station contains its shelves in the scenario scenes), not by ``at``: the ontology makes a
+    ``Surface`` a ``Location``, and ``at`` needs a physical object as its subject. A surface
+    that no location contains (the meal scenario's worktop, only ``at`` its robot's home) is
+    therefore not a ``place_on`` target for the planner."""
+
+    description = SkillDescription(
+        name="place_on",
+        skill_type="place",
+        doc="Put the held object down on a free spot of a surface (a shelf, a table) in reach.",
+        parameters=[
+            OBJECT,
+            ParamSpec(name="surface", type=Cls.Surface, doc="where it goes (on its top)"),
+            ParamSpec(
+                name="location",
+                type=Cls.Location,
+                doc="where the robot stands: the station that holds the surface",
+            ),
+            *DEVICES,
+            *[p for p in TUNING if p.name != "wall"],
+            offline("edge", "float", 0.03, "margin kept from the surface's edges, m"),
+        ],
+        pre=[
+            contains("gripper", "object"),
+            at("robot", "location"),
+            contains("location", "surface"),
+        ],
+        hold=[contains("gripper", "object")],
+        post=[contains("surface", "object"), contains("gripper", "object", holds=False)],
+        duration=4.0,
+    )
+    target_param = "surface"
+
+
+def is_surface(wm: WmClient, element: str) -> bool:
+    """Whether the element is a Surface (a shelf, a table, a smart platform) and not a
+    container: what is put there stands on its top."""
+    cls = wm.get_element(element).type
+    onto = wm.ontology
+    return onto.is_a(cls, Cls.Surface) and not onto.is_a(cls, Cls.Container)
+
+
 def _occupied(wm: WmClient, container: str, moving: str) -> list[tuple[Vec3, float]]:
-    """Positions (world) and footprint radii of what the container holds already."""
+    """Positions (world) and footprint radii of what the container (or surface) holds
+    already."""
     found = []
     for child in wm.get_children(container, Rel.contain):
         where = world_transform(wm, child.id) if child.id != moving else None

@@ -1,13 +1,14 @@
 """The simulated devices over real Zenoh on loopback: the same skill-like routine runs
-unchanged in-process and through the remote proxies, errors keep their class, cancelling a
-remote motion halts the device, states are published; and ``skimesh sim`` as a process."""
+unchanged in-process and through the remote proxies (also one driving the base by velocity),
+errors keep their class, cancelling a remote motion halts the device, states are published;
+and ``skimesh sim`` as a process."""
 
 from __future__ import annotations
 
 import math
 import subprocess
 import sys
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 from functools import partial
 from pathlib import Path
@@ -19,7 +20,12 @@ import pytest
 
 from device_drivers import protocol as p
 from device_drivers.drivers import sim_devices
-from device_drivers.errors import CommandError, DeviceBusyError, UnreachableError
+from device_drivers.errors import (
+    CommandError,
+    DeviceBusyError,
+    MotionStoppedError,
+    UnreachableError,
+)
 from device_drivers.interfaces import Arm, Device, Gripper, MobileBase, ObjectSensor
 from device_drivers.motion_math import tool_down
 from device_drivers.remote import serve_devices
@@ -68,6 +74,43 @@ async def routine(
     }
 
 
+async def drive(base: MobileBase, pause: Callable[[], Awaitable[None]]) -> dict[str, Any]:
+    """Velocity control written against the MobileBase Protocol only (``pause``: wait 2 s of
+    the device's time): a timed twist, an open-ended spin read back from the state, refusals,
+    and a stop that ends the spin."""
+    await base.set_velocity(0.0, 0.3, 0.0, duration=1.5)  # sideways: base y = world y
+    after = await base.state()
+    outcome: list[str] = []
+
+    async def spin() -> None:
+        try:
+            await base.set_velocity(0.0, 0.0, 0.5)
+            outcome.append("ended")
+        except MotionStoppedError:
+            outcome.append("stopped")
+
+    refused: list[str] = []
+    async with anyio.create_task_group() as tg:
+        tg.start_soon(spin)
+        await pause()  # ramped up (0.5 s) and spinning
+        spinning = await base.state()
+        for bad in (base.go_to(Pose2D(-0.6, -1.2, 0.0)), base.set_velocity(math.inf, 0.0, 0.0)):
+            try:
+                await bad
+            except (DeviceBusyError, CommandError) as exc:
+                refused.append(type(exc).__name__)
+        await base.stop()
+    halted = await base.state()
+    return {
+        "pose": (after.pose.x, after.pose.y, after.pose.yaw),
+        "moving_after": after.moving,
+        "spin": (spinning.velocity.vx, spinning.velocity.vy, spinning.velocity.wz),
+        "refused": refused,
+        "outcome": outcome,
+        "halted": (halted.moving, abs(halted.velocity.wz)),
+    }
+
+
 def r1(devices: dict[tuple[str, str], Device]) -> tuple[Arm, Gripper, MobileBase, ObjectSensor]:
     arm, gripper = devices[("r1", "arm")], devices[("r1", "gripper")]
     base, camera = devices[("r1", "base")], devices[("r1", "camera")]
@@ -108,6 +151,24 @@ async def test_same_routine_in_process_and_remote(
     assert math.dist(remote["base"], local["base"]) < 0.01
     assert math.dist(remote["tcp"], local["tcp"]) < 0.005
     assert remote["opening"] == pytest.approx(local["opening"], abs=0.002)
+
+
+async def test_velocity_control_in_process_and_remote(
+    router_endpoint: str, mesh_config: MeshConfigFactory
+) -> None:
+    async with running_world(load_scenario(KITTING), WorldOptions(fast=True)) as world:
+        local = await drive(r1(sim_devices(world))[2], partial(world.sleep, 2.0))
+    async with served_world(router_endpoint, mesh_config) as (world, client):
+        base = r1(await connect_devices(client, "r1"))[2]
+        remote = await drive(base, partial(world.sleep, 2.0))
+    for result in (local, remote):
+        assert result["pose"] == pytest.approx((-0.6, -1.0 + 0.45, 0.0), abs=0.01)
+        assert not result["moving_after"]
+        assert result["spin"] == pytest.approx((0.0, 0.0, 0.5), abs=0.01)
+        assert result["refused"] == ["DeviceBusyError", "CommandError"]
+        assert result["outcome"] == ["ended"]  # stop() is how an open-ended twist ends
+        assert result["halted"][0] is False and result["halted"][1] < 0.01
+    assert math.dist(remote["pose"], local["pose"]) < 0.005
 
 
 async def test_the_loop_never_blocks_while_serving_motions(

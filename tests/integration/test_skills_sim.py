@@ -1,6 +1,7 @@
 """The standard skills in the MuJoCo simulation (fast mode), through the agent core, on both
 scenarios: a part picked and placed into the kit box with real physics and attachment (the
-world model and the world's ground truth agree), a sensed pose written with its source, a part
+world model and the world's ground truth agree), a part picked at a station and put down on
+its shelf (place_on), a sensed pose written with its source, a part
 dropped mid-carry detected as a failure, a stop mid-motion that halts the arm, the microwave
 agent's door, heat and button (operate / operate_stop) skills, and the meal box served on the
 tray with a side grasp."""
@@ -37,6 +38,7 @@ from skill_agent.skills import (
     Place,
     Serve,
 )
+from skill_agent.skills.place import PlaceOn
 from tests.conftest import SlowSteps
 from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
 from wm_store.protocol import Pose
@@ -169,6 +171,28 @@ async def test_pick_and_place_a_part_into_the_kit_box(
     assert (believed.x, believed.y) == pytest.approx((kit.x, kit.y), abs=0.02)
     runs = [r for r in blocking_detector.reports if "skill run" in r]  # the skills' own tasks
     assert not runs, "no skill step held the event loop for 50 ms"
+
+
+async def test_pick_a_part_and_place_it_on_the_stations_shelf(kitting: Sim) -> None:
+    sim = kitting
+    async with sim.agent("r1", *KITTING, PlaceOn, sensors=("Camera-1",)) as r1:
+        for skill, params in (
+            ("navigate", {"goal": sim["Station-1"]}),
+            ("pick", {"object": sim["Gear-1"]}),
+            ("place_on", {"object": sim["Gear-1"], "surface": sim["Shelf-1"]}),
+        ):
+            result = await run(r1, skill, **params)
+            assert result.success, f"{skill}: {result.message}"
+    assert sim.wm.query_relation(sim["Shelf-1"], Rel.contain, sim["Gear-1"])
+    await sim.world.sleep(0.5)
+    gear, shelf = sim.world.body_pose("Gear-1"), sim.world.body_pose("Shelf-1")
+    assert "Gear-1" not in sim.world.snapshot.attached
+    assert gear.z - 0.0125 == pytest.approx(0.70, abs=0.003), "resting on the shelf top"
+    assert abs(gear.x - shelf.x) < 0.3 and abs(gear.y - shelf.y) < 0.6, "within its top"
+    assert not any(sim.world.object_in("Gear-1", box) for box in ("PartBox-1", "PartBox-2"))
+    believed = sim.wm.spatial.world_pose(sim["Gear-1"]).position  # the camera's sighting
+    assert np.hypot(believed.x - gear.x, believed.y - gear.y) < 0.01
+    assert abs(believed.z - gear.z) < 0.01
 
 
 async def test_locate_writes_the_pose_it_sees(kitting: Sim) -> None:

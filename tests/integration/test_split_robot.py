@@ -208,13 +208,20 @@ async def test_both_agents_register_for_one_robot(site: Site) -> None:
 
         listed = await find_skills(mesh)
         assert [d.name for d in listed["r1-base"].skills] == ["navigate"]
-        assert sorted(d.name for d in listed["r1-arm"].skills) == ["locate", "pick", "place"]
+        assert sorted(d.name for d in listed["r1-arm"].skills) == [
+            "locate",
+            "pick",
+            "place",
+            "place_on",
+        ]
 
         agents = of_robot(found.agents(), robot)
         assert sorted(agents) == ["r1-arm", "r1-base"]
         assert not any(a.problems for a in agents.values())
         skills = {s.name for a in agents.values() for s in a.skills}
-        assert skills == {"locate", "navigate", "pick", "place"}, "the union of their skills"
+        assert skills == {"locate", "navigate", "pick", "place", "place_on"}, (
+            "the union of their skills"
+        )
 
 
 # --------------------------------------------------------------------------- runs

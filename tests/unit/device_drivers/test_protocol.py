@@ -9,7 +9,7 @@ import pytest
 
 from device_drivers import errors
 from device_drivers import protocol as p
-from device_drivers.interfaces import ArmState, GripperState, WorldPose
+from device_drivers.interfaces import ArmState, BaseState, GripperState, Twist2D, WorldPose
 from device_drivers.robot_spec import Pose2D
 
 
@@ -24,6 +24,8 @@ from device_drivers.robot_spec import Pose2D
         p.OpenGripper(0.05),
         p.CloseGripper(15.0),
         p.GoTo(Pose2D(1.0, 2.0, 0.5), speed=0.3),
+        p.SetVelocity(0.2, -0.1, 0.5, duration=2.0),
+        p.SetVelocity(wz=0.3),
         p.Detect(),
         p.SetDoor(True),
         p.Heat(30.0, power=0.5),
@@ -40,6 +42,18 @@ def test_replies_round_trip() -> None:
     closed = p.Closed(GripperState(opening=0.05, holding="Gear-1", pads_in_contact=2))
     for reply in (arm, closed, p.Done(), p.DeviceInfo("arm", "r1-arm", "r1", "arm")):
         assert p.decode_reply(p.encode(reply)) == reply
+
+
+def test_the_base_velocity_is_a_field_with_a_default() -> None:
+    moving = p.BaseStateReply(BaseState(pose=Pose2D(1.0), velocity=Twist2D(0.2, 0.0, -0.1)))
+    assert p.decode_reply(p.encode(moving)) == moving
+    old = {"reply": "base_state", "state": {"pose": {"x": 1.0, "y": 0.0, "yaw": 0.0}}}
+    reply = p.decode_reply(msgspec.msgpack.encode(old))  # from a server before the field
+    assert isinstance(reply, p.BaseStateReply) and reply.state.velocity == Twist2D()
+    with pytest.raises(msgspec.ValidationError):  # the duration stays bounded on the wire
+        p.decode_request(
+            msgspec.msgpack.encode({"command": {"cmd": "set_velocity", "duration": 0.0}})
+        )
 
 
 def test_unknown_fields_are_tolerated_on_the_wire() -> None:

@@ -1,5 +1,6 @@
 """Motion primitives over fake devices (success, typed failures, timeouts, cancellation that
-stops the device, progress) and the pure grasp / release / slot planning."""
+stops the device, refusals that do not, progress) and the pure grasp / release / slot
+planning (in a container and on a surface)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,12 @@ import math
 import anyio
 import pytest
 
-from device_drivers.errors import CollisionError, GraspLostError, MotionTimeoutError
+from device_drivers.errors import (
+    CollisionError,
+    GraspLostError,
+    MotionTimeoutError,
+    UnreachableError,
+)
 from device_drivers.interfaces import WorldPose
 from device_drivers.robot_spec import Pose2D
 from skill_agent.primitives import (
@@ -16,6 +22,7 @@ from skill_agent.primitives import (
     NoGraspError,
     approach,
     close_gripper,
+    drive,
     extents,
     face,
     footprint_radius,
@@ -31,6 +38,7 @@ from skill_agent.primitives import (
     release_pose,
     retreat,
     sub_progress,
+    surface_spots,
 )
 from skill_agent.primitives.poses import (
     axis,
@@ -117,6 +125,21 @@ async def test_a_failed_motion_stops_the_device_and_raises_its_error(arm: FakeAr
 
 
 @pytest.mark.anyio
+async def test_an_unreachable_target_is_refused_without_a_stop(arm: FakeArm) -> None:
+    arm.fail_next["line"] = UnreachableError(
+        position_error=0.5,
+        orientation_error=0.0,
+        iterations=9,
+        solver="fake",
+        joints={},
+        whole_body=False,
+    )
+    with pytest.raises(UnreachableError):
+        await move_cartesian(arm, DOWN)
+    assert arm.stops == 0  # nothing moved; a stop would only reset the held set-points
+
+
+@pytest.mark.anyio
 async def test_a_slow_motion_times_out_and_stops(arm: FakeArm) -> None:
     arm.hold = anyio.Event()
     with pytest.raises(MotionTimeoutError, match=r"not done within 0\.05 s"):
@@ -166,6 +189,11 @@ async def test_base_primitives(world: ToyWorld) -> None:
     with anyio.move_on_after(0.05):
         await navigate_to(base, Pose2D(5.0, 5.0))
     assert base.stops == 1
+    with pytest.raises(MotionTimeoutError, match=r"drive at \(0\.10, 0\.00, 0\.00\)"):
+        await drive(base, 0.1, 0.0, 0.0, timeout=0.05)  # open-ended: its timeout stops it
+    assert base.stops == 2 and base.calls[-1] == "velocity"
+    base.hold = None
+    assert await drive(base, 0.0, 0.0, 0.3, duration=1.0) == turned  # the fake stays put
 
 
 def test_sub_progress_maps_into_a_share() -> None:
@@ -288,3 +316,26 @@ def test_free_spots_avoid_walls_and_what_is_there() -> None:
         abs(x) <= 0.12 - 0.008 - 0.028 and abs(y) <= 0.15 - 0.008 - 0.028 for x, y, _ in spots
     )
     assert free_spot(kit, size, 0.2) is None
+
+
+def test_surface_spots_lie_on_the_top_clear_of_edges_and_boxes_nearest_the_robot() -> None:
+    shelf = Transform((1.23, -1.0, 0.35))  # the kitting shelf: 0.6 x 1.2 x 0.7 m, centre
+    size = (0.6, 1.2, 0.7)
+    boxes = [((1.06, -1.25, 0.725), 0.18), ((1.06, -0.75, 0.725), 0.18)]
+    spots = surface_spots(shelf, size, 0.028, boxes, edge=0.03, near=(0.55, -1.0, 0.0))
+    assert spots and all(z == pytest.approx(0.70) for _, _, z in spots)  # on the top
+    assert all(
+        abs(x - 1.23) <= 0.3 - 0.03 - 0.028 + 1e-9 and abs(y + 1.0) <= 0.6 - 0.03 - 0.028 + 1e-9
+        for x, y, _ in spots
+    )
+    assert all(
+        math.hypot(x - bx, y - by) >= 0.028 + r + 0.012 - 1e-9
+        for x, y, _ in spots
+        for (bx, by, _), r in boxes
+    )
+    assert spots[0] == pytest.approx((0.93 + 0.03 + 0.028, -1.0, 0.70))  # front, between boxes
+    reach = [math.hypot(x - 0.55, y + 1.0) for x, y, _ in spots]
+    assert reach == sorted(reach)
+    centred = surface_spots(shelf, size, 0.028)  # nothing near: the centre first
+    assert centred[0] == pytest.approx((1.23, -1.0, 0.70))
+    assert surface_spots(shelf, (0.05, 0.05, 0.7), 0.028) == []  # too small for the part

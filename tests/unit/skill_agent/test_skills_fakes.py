@@ -192,6 +192,11 @@ class FakeBase(FakeDevice):
         await self._motion("go_to", progress)
         self.pose = target
 
+    async def set_velocity(
+        self, vx: float, vy: float, wz: float, *, duration: float | None = None
+    ) -> None:
+        await self._motion("velocity", None)  # the pose stays: no skill here drives by twist
+
 
 class FakeSensor(FakeDevice):
     async def detect(self) -> list[Detection]:

@@ -1,28 +1,42 @@
-"""The kitting skills (navigate, locate, pick, place) through the agent core, on the kitting
-scenario's world model, with fake devices: predictions committed, honest failures (not seen,
-grasp failed, dropped on the way, unreachable), stops that halt the hardware, and the same
-skills in simulated-outcome mode."""
+"""The kitting skills (navigate, locate, pick, place, place_on) through the agent core, on the
+kitting scenario's world model, with fake devices: predictions committed, honest failures (not
+seen, grasp failed, dropped on the way, unreachable, a part that lands in a box instead of on
+the shelf), stops that halt the hardware, the same skills in simulated-outcome mode, and a
+planner that uses place_on for a part wanted on a shelf."""
 
 from __future__ import annotations
 
 from collections.abc import AsyncIterator
 
 import anyio
+import msgspec
 import pytest
 
 from device_drivers.errors import UnreachableError
 from device_drivers.robot_spec import Pose2D
+from skill_agent.conditions import describe, symbolic
+from skill_agent.config import load_config
 from skill_agent.core import AgentCore
+from skill_agent.errors import ParameterTypeError, PreconditionError
+from skill_agent.params import check_description
 from skill_agent.protocol import Progress, RunEvent, StartRun
 from skill_agent.simulated import SimulatedOutcomes
 from skill_agent.skills import Locate, Navigate, Pick, Place
+from skill_agent.skills.place import PlaceOn
+from skill_agent.skills.sensing import move_ops
+from task_agent.discovery_model import agents_from_view
+from task_agent.goals import parse_goal
+from task_agent.planner import Planner
+from tests.unit.skill_agent.scenario_planning import CONFIGS, register_agent
 from tests.unit.skill_agent.test_skills_fakes import FakeArm, FakeGripper, Rig, rig, run
+from wm_store import Ontology, WmClient
 from wm_store.protocol import Pose, Value
 from wm_store.vocab import Prop, Rel
 
 pytestmark = pytest.mark.anyio
 
-SKILLS = (Navigate, Locate, Pick, Place)
+SKILLS = (Navigate, Locate, Pick, Place, PlaceOn)
+SHELF_TOP = 0.70  # Shelf-1: 0.6 x 1.2 m, 0.70 m high, its front edge at x = 0.93
 
 
 @pytest.fixture
@@ -254,3 +268,96 @@ async def test_a_simulated_failure_commits_nothing(kit: Rig) -> None:
         result = await run(core, "navigate", goal=kit["Station-1"])
     assert not result.success and result.reason == "execution"
     assert kit.wm.query_relation(kit["r1"], Rel.at, kit["r1-home"])
+
+
+# --------------------------------------------------------------------------- place_on a surface
+
+
+def test_place_on_is_described_for_the_planner() -> None:
+    desc = PlaceOn.description
+    check_description(desc, Ontology.default())
+    assert desc.family == Place.description.family == "place"
+    atoms = [a for c in [*desc.pre, *desc.hold, *desc.post] for a in symbolic(c) or []]
+    assert len(atoms) == len(desc.pre) + len(desc.hold) + len(desc.post), "all plannable"
+    assert [describe(c) for c in desc.post] == [
+        "contain(surface, object)",
+        "not contain(gripper, object)",
+    ]
+
+
+async def test_place_on_puts_the_part_on_the_shelf_top_nearest_the_robot(
+    kit: Rig, r1: AgentCore
+) -> None:
+    await at_station(r1, kit)
+    assert (await run(r1, "pick", object=kit["Gear-1"])).success
+
+    def fall(event: RunEvent) -> None:  # released `drop` m above the top, it lands on it
+        if isinstance(event, Progress) and event.step == "retreat":
+            gear = kit.world.objects["Gear-1"]
+            kit.world.objects["Gear-1"] = gear.__class__(gear.x, gear.y, SHELF_TOP + 0.0125)
+
+    r1.subscribe(fall)
+    placed = await run(r1, "place_on", object=kit["Gear-1"], surface=kit["Shelf-1"])
+    assert placed.success, placed.message
+    assert placed.params["location"] == kit["Station-1"], "inferred from at(robot, location)"
+    assert kit.wm.get_parent(kit["Gear-1"]).id == kit["Shelf-1"]  # type: ignore[union-attr]
+    assert gripper(kit).holding == ""
+    release = [c for c in arm(kit).calls if c == "line"]
+    assert release, "a straight move down to the release pose"
+    gear = kit.world.objects["Gear-1"]
+    assert gear.x == pytest.approx(0.93 + 0.03 + 0.028)  # the front strip: nearest the robot
+    assert gear.y == pytest.approx(-1.0)  # the free gap between the two part boxes
+    for box in ("PartBox-1", "PartBox-2"):  # between the boxes, not in one
+        assert not kit.wm.spatial.is_inside(kit["Gear-1"], kit[box])
+    seen = kit.wm.spatial.world_pose(kit["Gear-1"]).position
+    assert (seen.x, seen.y) == pytest.approx((gear.x, gear.y))  # the sighting was written
+
+
+async def test_place_on_fails_when_the_part_lands_in_a_box_instead(kit: Rig, r1: AgentCore) -> None:
+    await at_station(r1, kit)
+    assert (await run(r1, "pick", object=kit["Gear-1"])).success
+    box = kit.wm.spatial.world_pose(kit["PartBox-2"]).position
+
+    def bounce(event: RunEvent) -> None:  # released, it rolls into the next box
+        if isinstance(event, Progress) and event.step == "retreat":
+            kit.world.objects["Gear-1"] = kit.world.objects["Gear-1"].__class__(box.x, box.y, box.z)
+
+    r1.subscribe(bounce)
+    result = await run(r1, "place_on", object=kit["Gear-1"], surface=kit["Shelf-1"])
+    assert not result.success and result.reason == "execution"
+    assert "did not land in the target" in result.message and "PartBox-2" in result.message
+    assert kit.wm.get_parent(kit["Gear-1"]).id == kit["PartBox-2"]  # type: ignore[union-attr]
+    assert not kit.wm.query_relation(kit["Shelf-1"], Rel.contain, kit["Gear-1"])
+
+
+async def test_place_on_needs_a_surface_where_the_robot_is(kit: Rig, r1: AgentCore) -> None:
+    await kit.wm.transact(move_ops(kit.wm, kit["Gear-1"], kit["r1-gripper"]))  # held at home
+    params: dict[str, Value] = {
+        "object": kit["Gear-1"],
+        "surface": kit["Shelf-1"],
+        "location": kit["r1-home"],  # where r1 is
+    }
+    with pytest.raises(PreconditionError, match=r"contain\(Location-1, Shelf-1\)"):
+        await r1.start(StartRun(skill="place_on", params=params))
+    params["surface"] = kit["PartBox-1"]  # a box is no surface
+    with pytest.raises(ParameterTypeError, match="Surface"):
+        await r1.start(StartRun(skill="place_on", params=params))
+    assert not arm(kit).calls
+
+
+async def test_a_planner_puts_a_part_on_a_shelf_with_place_on(kit: Rig) -> None:
+    config = load_config(CONFIGS / "kitting" / "r1.toml")
+    paths = [*config.skills.paths, "skill_agent.skills.place:PlaceOn"]
+    config = msgspec.structs.replace(
+        config, skills=msgspec.structs.replace(config.skills, paths=paths)
+    )
+    wm: WmClient = kit.wm
+    await register_agent(wm, config)
+    found = agents_from_view(wm)
+    assert all(not a.problems for a in found), [a.problems for a in found]
+    plan = await Planner(timeout=60).plan(found, wm, parse_goal("contain(Shelf-2, Gear-1)", wm))
+    skills = [s.skill for s in plan.steps]
+    assert skills[-1] == "place_on" and "place" not in skills  # not into the kit box
+    assert skills.index("pick") < len(skills) - 2 and skills[-2] == "navigate"  # carried over
+    last = plan.steps[-1].params
+    assert last["surface"] == kit["Shelf-2"] and last["location"] == kit["Station-2"]

@@ -86,7 +86,7 @@ async def test_both_agents_control_one_robot_and_discovery_joins_their_skills(
     assert sorted(agents) == ["r1-arm", "r1-base"]
     assert not any(a.problems for a in agents.values())
     skills = {s.name for a in agents.values() for s in a.skills}
-    assert skills == {"locate", "navigate", "pick", "place"}
+    assert skills == {"locate", "navigate", "pick", "place", "place_on"}
     labels = {wm.get_element(d).label for d in agents["r1-arm"].devices}
     assert {"r1-arm", "r1-gripper", "r1-camera", "r1-base"} <= labels, "the robot's parts"
 
