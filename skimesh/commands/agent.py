@@ -87,9 +87,15 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         'element ids; typed values as JSON, e.g. pose=\'{"position": {"x": 1}}\'). Exit '
         "codes: 0 succeeded, 1 failed, 2 refused, 3 agent unreachable or lost / deadline.",
     )
-    run.add_argument("agent")
-    run.add_argument("skill")
-    run.add_argument("params", nargs="*", metavar="KEY=VALUE")
+    run.add_argument("agent", help="the agent that runs it (see `skimesh agents`)")
+    run.add_argument("skill", help="the skill's name (see `skimesh skills AGENT`)")
+    run.add_argument(
+        "params",
+        nargs="*",
+        metavar="KEY=VALUE",
+        help="parameters, e.g. object=Gear-1 (element ids as given; numbers, booleans and typed "
+        "values as JSON, by the parameter's declared type)",
+    )
     run.add_argument("--queue", action="store_true", help="wait for busy devices, not refuse")
     run.add_argument("--simulate", action="store_true", help="simulated outcome for this run")
     run.add_argument("--run-timeout", type=float, help="the run's own time limit (s)")
@@ -100,13 +106,13 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     reload = sub.add_parser(
         "reload", help="re-import an agent's skill plug-ins (runs in flight keep their code)"
     )
-    reload.add_argument("agent")
+    reload.add_argument("agent", help="the agent whose skills are loaded again")
     _client_arguments(reload)
     reload.set_defaults(func=lambda a: _client(a, _reload))
 
     stop = sub.add_parser("stop", help="stop a run (the skill brings its hardware to safety)")
-    stop.add_argument("agent")
-    stop.add_argument("run_id")
+    stop.add_argument("agent", help="the agent running it")
+    stop.add_argument("run_id", help="the run's id (printed by `skimesh run`)")
     _client_arguments(stop)
     stop.set_defaults(func=lambda a: _client(a, _stop))
 

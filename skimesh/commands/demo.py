@@ -77,7 +77,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated sensor noise")
     p.add_argument("--max-replans", type=int, default=5, metavar="N",
                    help="replans allowed after failed steps (default: %(default)s)")  # fmt: skip
-    p.add_argument("--planner-timeout", type=float, default=60.0, metavar="S")
+    p.add_argument("--planner-timeout", type=float, default=60.0, metavar="S",
+                   help="give up planning (each plan, each replan) after S seconds")  # fmt: skip
     p.add_argument("--deadline", type=float, default=1800.0, metavar="S",
                    help="give up on the task after this many wall seconds")  # fmt: skip
     p.set_defaults(func=_run)
