@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
 from typing import NoReturn
@@ -31,17 +30,10 @@ from meshlink import MeshlinkError, add_mesh_arguments
 from task_agent.client import TaskClient, new_task_id
 from task_agent.errors import TaskError, VerificationError
 from task_agent.protocol import (
-    Planned,
-    Replanning,
-    StepFinished,
     StepProgress,
-    StepStarted,
     TaskEvent,
     TaskFinished,
-    TaskInfo,
     TaskOptions,
-    TaskStarted,
-    VerifyProblem,
 )
 from wm_store import WmClient, WmError, ZenohTransport
 
@@ -49,8 +41,9 @@ from ..connect import mesh_session, wm_session
 from ..runtime import run_service
 from . import operator as operator_command
 from . import plan as plan_command
+from .task_output import ProgressPrinter, info_lines, print_json, print_problems
 
-__all__ = ["EXIT_CODES", "ProgressPrinter", "add_parser"]
+__all__ = ["EXIT_CODES", "add_parser"]
 
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
 EXIT_CODES = {"succeeded": 0, "failed": 1, "unsolvable": 2, "aborted": 3}
@@ -279,103 +272,6 @@ def _serve(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------- output
 
 
-def _print_json(obj: object) -> None:
-    sys.stdout.write(msgspec.json.encode(obj).decode() + "\n")
-    sys.stdout.flush()
-
-
-class ProgressPrinter:
-    """One line per event (times from the task's start), then a summary per robot."""
-
-    def __init__(self) -> None:
-        self.t0: float | None = None
-        self.skills: dict[int, str] = {}
-        self.begun: dict[int, float] = {}
-        self.busy: dict[str, float] = {}
-        self.count: dict[str, int] = {}
-
-    def __call__(self, event: TaskEvent) -> None:
-        for line in self.lines(event):
-            print(line, flush=True)
-
-    def lines(self, event: TaskEvent) -> list[str]:
-        self.t0 = event.stamp if self.t0 is None else self.t0
-        at = f"{event.stamp - self.t0:7.2f}s"
-        match event:
-            case TaskStarted():
-                return [f"task {event.task_id}: {event.goal or event.name or '(unnamed)'}"]
-            case Planned():
-                return self._planned(event)
-            case StepStarted():
-                self.skills[event.step], self.begun[event.step] = event.skill, event.stamp
-                return [_step(at, event.agent, event.step, event.skill, "started")]
-            case StepProgress():
-                text = f"[{event.state}] {event.message}".rstrip()
-                skill = self.skills.get(event.step, "")
-                return [_step(at, event.agent, event.step, skill, text)]
-            case StepFinished():
-                return [_step(at, event.agent, event.step, event.skill, self._end(event))]
-            case Replanning():
-                return [f"{at}  replanning (attempt {event.attempt}): {event.reason}"]
-            case TaskFinished():
-                return self._summary(event)
-
-    def _planned(self, event: Planned) -> list[str]:
-        who = ", ".join(sorted({s.agent or "any" for s in event.steps})) or "nobody"
-        head = (
-            f"plan {event.attempt} ({event.planner}, {event.plan_seconds:.2f} s): "
-            f"{len(event.steps)} steps on {who}; makespan {event.makespan:.1f} s "
-            f"(sequential {event.sequential:.1f} s)"
-        )
-        rows = []
-        for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
-            args = ", ".join(f"{k}={v}" for k, v in s.params.items())
-            after = ",".join(map(str, s.after)) or "-"
-            rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {s.skill}({args})  after {after}")
-        return [head, *rows]
-
-    def _end(self, event: StepFinished) -> str:
-        began = self.begun.pop(event.step, None)
-        if began is not None:
-            self.busy[event.agent] = self.busy.get(event.agent, 0.0) + event.stamp - began
-            self.count[event.agent] = self.count.get(event.agent, 0) + 1
-        who = " by the operator" if event.by_operator else ""
-        if event.success:
-            return f"succeeded{who}"
-        return f"FAILED{who} ({event.reason}): {event.message}"
-
-    def _summary(self, event: TaskFinished) -> list[str]:
-        plural = "s" if event.replans != 1 else ""
-        lines = [
-            f"task {event.task_id} {event.outcome} in {event.duration:.2f} s: "
-            f"{event.steps_run} steps run, {event.replans} replan{plural}"
-        ]
-        for agent in sorted(self.count):
-            lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
-        if event.message:
-            lines.append(f"  {event.message}")
-        return lines
-
-
-def _step(at: str, agent: str, step: int, skill: str, text: str) -> str:
-    return f"{at}  {agent:<10} step {step:<3} {skill:<10} {text}"
-
-
-def _info_lines(info: TaskInfo) -> list[str]:
-    ended = f", ended {time.ctime(info.finished_at)}" if info.finished_at else ""
-    return [
-        f"{info.task_id}  {info.outcome}  {info.goal or info.name}",
-        f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
-        f"{info.replans} replans",
-        *([f"  {info.message}"] if info.message else []),
-    ]
-
-
-def _problems(problems: list[VerifyProblem]) -> None:
-    for p in problems:
-        print(f"  {p.path or '-'}  [{p.kind}] {p.message}", file=sys.stderr)
-
-
 # --------------------------------------------------------------------------- commands
 
 
@@ -390,7 +286,7 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
             raise
         except VerificationError as e:
             print(f"refused: {e}", file=sys.stderr)
-            _problems(getattr(e, "problems", []))
+            print_problems(getattr(e, "problems", []))
             return EXIT_ERROR
         except (TaskError, MeshlinkError, OSError) as e:
             print(f"error: {e}", file=sys.stderr)
@@ -445,7 +341,7 @@ async def _submit(args: argparse.Namespace) -> int:
 
 
 async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) -> int:
-    show: Callable[[TaskEvent], None] = _print_json if args.json else ProgressPrinter()
+    show: Callable[[TaskEvent], None] = print_json if args.json else ProgressPrinter()
     async for event in events:
         if not (args.no_progress and isinstance(event, StepProgress)):
             show(event)
@@ -465,9 +361,9 @@ async def _status(args: argparse.Namespace) -> int:
     async with mesh_session(args) as mesh:
         info = await TaskClient(mesh, timeout=args.timeout).status(args.task_id)
     if args.json:
-        _print_json(info)
+        print_json(info)
     else:
-        print("\n".join(_info_lines(info)))
+        print("\n".join(info_lines(info)))
     return 0
 
 
@@ -475,7 +371,7 @@ async def _list(args: argparse.Namespace) -> int:
     async with mesh_session(args) as mesh:
         tasks = await TaskClient(mesh, timeout=args.timeout).list(active_only=args.active)
     if args.json:
-        _print_json(tasks)
+        print_json(tasks)
     for info in [] if args.json else tasks:
         print(f"{info.task_id:<14} {info.outcome:<10} {info.replans} replans  "
               f"{info.goal or info.name}")  # fmt: skip
@@ -490,7 +386,7 @@ async def _abort(args: argparse.Namespace) -> int:
         reply = await client.abort(args.task_id, args.reason)
         info = await client.status(args.task_id)
     if args.json:
-        _print_json({**msgspec.to_builtins(info), "reply": reply})  # the task, and the answer
+        print_json({**msgspec.to_builtins(info), "reply": reply})  # the task, and the answer
     else:
         print(reply)
     if info.outcome == "running":
@@ -507,10 +403,10 @@ async def _verify(args: argparse.Namespace) -> int:
     async with mesh_session(args) as mesh:
         reply = await TaskClient(mesh, timeout=args.timeout).verify(text)
     if args.json:
-        _print_json(reply)
+        print_json(reply)
     elif reply.ok:
         print(f"{args.file}: verifies")
     else:
         print(f"{args.file}: {len(reply.problems)} problems", file=sys.stderr)
-        _problems(reply.problems)
+        print_problems(reply.problems)
     return 0 if reply.ok else 1

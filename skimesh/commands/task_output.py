@@ -1,0 +1,121 @@
+"""What ``skimesh task`` prints: one line per task event with a summary per robot
+(:class:`ProgressPrinter`), a task's state, verification problems, JSON lines."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import msgspec
+
+from task_agent.protocol import (
+    Planned,
+    Replanning,
+    StepFinished,
+    StepProgress,
+    StepStarted,
+    TaskEvent,
+    TaskFinished,
+    TaskInfo,
+    TaskStarted,
+    VerifyProblem,
+)
+
+__all__ = ["ProgressPrinter", "info_lines", "print_json", "print_problems", "step_line"]
+
+
+def print_json(obj: object) -> None:
+    sys.stdout.write(msgspec.json.encode(obj).decode() + "\n")
+    sys.stdout.flush()
+
+
+class ProgressPrinter:
+    """One line per event (times from the task's start), then a summary per robot."""
+
+    def __init__(self) -> None:
+        self.t0: float | None = None
+        self.skills: dict[int, str] = {}
+        self.begun: dict[int, float] = {}
+        self.busy: dict[str, float] = {}
+        self.count: dict[str, int] = {}
+
+    def __call__(self, event: TaskEvent) -> None:
+        for line in self.lines(event):
+            print(line, flush=True)
+
+    def lines(self, event: TaskEvent) -> list[str]:
+        self.t0 = event.stamp if self.t0 is None else self.t0
+        at = f"{event.stamp - self.t0:7.2f}s"
+        match event:
+            case TaskStarted():
+                return [f"task {event.task_id}: {event.goal or event.name or '(unnamed)'}"]
+            case Planned():
+                return self._planned(event)
+            case StepStarted():
+                self.skills[event.step], self.begun[event.step] = event.skill, event.stamp
+                return [step_line(at, event.agent, event.step, event.skill, "started")]
+            case StepProgress():
+                text = f"[{event.state}] {event.message}".rstrip()
+                skill = self.skills.get(event.step, "")
+                return [step_line(at, event.agent, event.step, skill, text)]
+            case StepFinished():
+                return [step_line(at, event.agent, event.step, event.skill, self._end(event))]
+            case Replanning():
+                return [f"{at}  replanning (attempt {event.attempt}): {event.reason}"]
+            case TaskFinished():
+                return self._summary(event)
+
+    def _planned(self, event: Planned) -> list[str]:
+        who = ", ".join(sorted({s.agent or "any" for s in event.steps})) or "nobody"
+        head = (
+            f"plan {event.attempt} ({event.planner}, {event.plan_seconds:.2f} s): "
+            f"{len(event.steps)} steps on {who}; makespan {event.makespan:.1f} s "
+            f"(sequential {event.sequential:.1f} s)"
+        )
+        rows = []
+        for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
+            args = ", ".join(f"{k}={v}" for k, v in s.params.items())
+            after = ",".join(map(str, s.after)) or "-"
+            rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {s.skill}({args})  after {after}")
+        return [head, *rows]
+
+    def _end(self, event: StepFinished) -> str:
+        began = self.begun.pop(event.step, None)
+        if began is not None:
+            self.busy[event.agent] = self.busy.get(event.agent, 0.0) + event.stamp - began
+            self.count[event.agent] = self.count.get(event.agent, 0) + 1
+        who = " by the operator" if event.by_operator else ""
+        if event.success:
+            return f"succeeded{who}"
+        return f"FAILED{who} ({event.reason}): {event.message}"
+
+    def _summary(self, event: TaskFinished) -> list[str]:
+        plural = "s" if event.replans != 1 else ""
+        lines = [
+            f"task {event.task_id} {event.outcome} in {event.duration:.2f} s: "
+            f"{event.steps_run} steps run, {event.replans} replan{plural}"
+        ]
+        for agent in sorted(self.count):
+            lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
+        if event.message:
+            lines.append(f"  {event.message}")
+        return lines
+
+
+def step_line(at: str, agent: str, step: int, skill: str, text: str) -> str:
+    return f"{at}  {agent:<10} step {step:<3} {skill:<10} {text}"
+
+
+def info_lines(info: TaskInfo) -> list[str]:
+    ended = f", ended {time.ctime(info.finished_at)}" if info.finished_at else ""
+    return [
+        f"{info.task_id}  {info.outcome}  {info.goal or info.name}",
+        f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
+        f"{info.replans} replans",
+        *([f"  {info.message}"] if info.message else []),
+    ]
+
+
+def print_problems(problems: list[VerifyProblem]) -> None:
+    for p in problems:
+        print(f"  {p.path or '-'}  [{p.kind}] {p.message}", file=sys.stderr)
