@@ -157,6 +157,23 @@ class Lab:
         ``python ARGS`` inside ``host``'s namespace."""
         return [str(LAUNCHER), "exec", self.ns(host), *args]
 
+    def wait_for_port(self, host: str, address: str, port: int, timeout: float = 10.0) -> None:
+        """Block until a TCP connection from ``host`` to ``address:port`` succeeds (a listener
+        is up), polling every 50 ms; AssertionError after ``timeout`` seconds."""
+        code = (
+            "import socket, sys, time\n"
+            f"deadline = time.monotonic() + {timeout!r}\n"
+            "while True:\n"
+            "    try:\n"
+            f"        socket.create_connection(({address!r}, {port}), timeout=0.5).close()\n"
+            "        break\n"
+            "    except OSError:\n"
+            "        if time.monotonic() > deadline: sys.exit('no listener')\n"
+            "        time.sleep(0.05)\n"
+        )
+        done = self.run(host, "-c", code, timeout=timeout + 20)
+        assert done.returncode == 0, f"{host}: nothing listens on {address}:{port}: {done.stderr}"
+
     def run(self, host: str, *args: str, timeout: float = 30.0) -> subprocess.CompletedProcess[str]:
         """Run ``python ARGS`` in ``host``'s namespace to its end (bounded by ``timeout``)."""
         return subprocess.run(

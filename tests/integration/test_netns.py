@@ -177,7 +177,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
         try:
             listen = ["--listen", s.endpoint, "--config", str(router_cfg)]
             s.start("router", "core", "-m", "skimesh", "router", *listen, ready="listening")
-            wait_for_port(lab, "ops", lab.address("core"), PORT)
+            lab.wait_for_port("ops", lab.address("core"), PORT)
             store = ["-m", "skimesh", "wm", "--data", str(folder / "wm"), "--config", client_cfg]
             s.start("store", "core", *store, *s.flags(), ready="world model ready")
             scenario = str(ROOT / "configs" / "scenarios" / "kitting" / "scenario.toml")
@@ -196,19 +196,6 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
         finally:
             for child in reversed(list(s.children.values())):
                 child.stop()
-
-
-def wait_for_port(lab: Lab, host: str, address: str, port: int) -> None:
-    code = (
-        "import socket, time\n"
-        "for _ in range(200):\n"
-        "    try:\n"
-        f"        socket.create_connection(({address!r}, {port}), timeout=0.5).close(); break\n"
-        "    except OSError: time.sleep(0.05)\n"
-        "else: raise SystemExit('no listener')\n"
-    )
-    done = lab.run(host, "-c", code, timeout=30)
-    assert done.returncode == 0, done.stderr
 
 
 def submit(site: Site, goal: str) -> Child:
