@@ -289,6 +289,11 @@ class Scenario(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     description: str = ""
     floor_size: Annotated[float, Meta(gt=1, le=100)] = 8.0
     """Half size of the floor, m."""
+    prior_noise: Annotated[float, Meta(ge=0, le=0.2)] = 0.0
+    """Rough prior knowledge (SkiROS): the standard deviation, m, of the error in x and y of the
+    parts' initial world-model poses (the simulation places them exactly); each part's error
+    is drawn from its label, so a scene is the same every time. Sensing (``locate``, which
+    ``pick`` runs first) refines them. 0: the world model starts with the exact poses."""
     robots: list[RobotEntry] = []
     furniture: list[FurnitureEntry] = []
     containers: list[ContainerEntry] = []

@@ -18,8 +18,9 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   location's pose is where a robot parks to work there (a station: facing its yaw; a home:
   the robot's start pose). Containers a robot carries get world poses too: the ``navigate``
   skill moves its robot's descendants with it.
-- **Prior knowledge**: each arm's home posture (``jointPositions``, :data:`HOME_6`, or the
-  ``home`` of an arm from MJCF files);
+- **Prior knowledge**: parts' poses exact, or rough with the scenario's ``prior_noise`` (an
+  error per part drawn from its label; ``locate`` refines them); each arm's home posture
+  (``jointPositions``, :data:`HOME_6`, or the ``home`` of an arm from MJCF files);
   appliance doors get a pose and size (for an arm that swings them); a cabinet's drawer its
   pose, size, ``drawerOpen = false`` and its handle as ``graspPose`` / ``graspWidth``;
   closed containers (a meal box) a ``graspPose`` from the side facing the robot in the
@@ -46,6 +47,8 @@ pose is updated and relations point at them.
 from __future__ import annotations
 
 import math
+import random
+import zlib
 from collections.abc import Mapping
 
 from device_drivers.drawer_layout import HANDLE_HALF, drawer_layout
@@ -163,6 +166,17 @@ def _drawer(f: FurnitureEntry) -> dict[str, Value]:
         Prop.graspPose: Pose(Position(hx - cx, hy - cy, hz - cz), Orientation(*q)),
         Prop.graspWidth: 2 * HANDLE_HALF[0],
     }
+
+
+def _prior_error(label: str, noise: float) -> tuple[float, float]:
+    """The x, y error of ``label``'s prior pose: Gaussian, ``noise`` m standard deviation,
+    drawn from the label (the same scene every time), at most 3 standard deviations."""
+    if noise <= 0:
+        return 0.0, 0.0
+    draw = random.Random(zlib.crc32(label.encode()))
+    limit = 3 * noise
+    dx, dy = (max(-limit, min(limit, draw.gauss(0.0, noise))) for _ in range(2))
+    return dx, dy
 
 
 def _side_grasp(depth: float, height: float) -> Pose:
@@ -324,8 +338,9 @@ class _Builder:
     def parts(self) -> None:
         for part in self.s.parts:
             p = self.placed[part.label]
+            dx, dy = _prior_error(part.label, self.s.prior_noise)
             props: dict[str, Value] = {
-                Prop.pose: _pose(p.x, p.y, p.z + part.height / 2, p.yaw),
+                Prop.pose: _pose(p.x + dx, p.y + dy, p.z + part.height / 2, p.yaw),
                 Prop.size: _part_size(part),
                 Prop.mass: part.mass,
             }

@@ -196,7 +196,13 @@ async def test_pick_a_part_and_place_it_on_the_stations_shelf(kitting: Sim) -> N
 
 
 async def test_locate_writes_the_pose_it_sees(kitting: Sim) -> None:
+    """The scene starts with rough prior part poses (the scenario's ``prior_noise``); locate
+    replaces the prior with what the camera sees, within a centimetre of the physics."""
     sim = kitting
+    prior = sim.wm.get_element(sim["Shaft-2"]).properties[Prop.pose]
+    truth = sim.world.body_pose("Shaft-2")
+    assert isinstance(prior, Pose)
+    assert np.hypot(prior.position.x - truth.x, prior.position.y - truth.y) > 0.004
     async with sim.agent("r1", *KITTING, sensors=("Camera-1",)) as r1:
         result = await run(r1, "locate", object=sim["Shaft-2"])
     assert result.success, result.message

@@ -4,15 +4,18 @@ knowledge (home postures, door geometry, side grasps), and re-use of elements al
 
 from __future__ import annotations
 
+import math
 from collections.abc import AsyncIterator
 from pathlib import Path
 
 import anyio
+import msgspec
 import mujoco
 import numpy as np
 import pytest
 
 from device_drivers.placement import resolve_placements
+from device_drivers.scenario import Scenario
 from device_drivers.scenario_load import load_scenario
 from device_drivers.scene_model import build_scene
 from skill_agent.primitives.poses import to_transform
@@ -94,7 +97,9 @@ async def test_poses_are_world_centres_and_sizes_are_set(wm: WmClient) -> None:
     pose, size = gear.properties[Prop.pose], gear.properties[Prop.size]
     assert isinstance(pose, Pose) and isinstance(size, SizeCylinder)
     bottom = placed["Gear-1"]
-    assert (pose.position.x, pose.position.y) == pytest.approx((bottom.x, bottom.y))
+    # rough prior knowledge: x and y off by the scenario's prior_noise (at most 3 sigma)
+    error = math.hypot(pose.position.x - bottom.x, pose.position.y - bottom.y)
+    assert scenario.prior_noise > 0 and 0 < error <= 3 * math.sqrt(2) * scenario.prior_noise
     assert pose.position.z == pytest.approx(bottom.z + size.height / 2)
     assert wm.spatial.is_inside(ids["Gear-1"], ids["PartBox-1"])
     assert wm.spatial.is_inside(ids["KitBox-1"], ids["KitBox-1"])
@@ -102,6 +107,28 @@ async def test_poses_are_world_centres_and_sizes_are_set(wm: WmClient) -> None:
     assert kit == SizeCuboid(x=0.24, y=0.30, z=0.07)
     station = wm.spatial.world_pose(ids["Station-1"]).position
     assert (station.x, station.y) == pytest.approx((0.55, -1.0))
+
+
+def test_rough_priors_are_the_same_every_time_and_exact_without_noise() -> None:
+    scenario = load_scenario(SCENARIOS / "kitting" / "scenario.toml")
+    placed = resolve_placements(scenario)
+
+    def part_xy(s: Scenario) -> dict[str, tuple[float, float]]:
+        out = {}
+        for op in scenario_ops(s):
+            if isinstance(op, AddElement) and op.type in {p.type for p in s.parts}:
+                pose = op.properties[Prop.pose]
+                assert isinstance(pose, Pose)
+                out[op.label] = (pose.position.x, pose.position.y)
+        return out
+
+    rough, again = part_xy(scenario), part_xy(scenario)
+    exact = part_xy(msgspec.structs.replace(scenario, prior_noise=0.0))
+    assert rough == again and len(rough) == len(scenario.parts)
+    errors = [math.dist(rough[k], exact[k]) for k in rough]
+    assert all(0 < e <= 3 * math.sqrt(2) * scenario.prior_noise for e in errors)
+    assert len(set(errors)) == len(errors), "each part has its own error"
+    assert all(exact[k] == pytest.approx((placed[k].x, placed[k].y)) for k in exact)
 
 
 async def test_arms_carry_their_home_posture(wm: WmClient) -> None:
