@@ -1,4 +1,5 @@
-"""The microwave controller (simulation thread): door motor and heater.
+"""The microwave controller (simulation thread): door motor and heater (a door without a motor,
+``ApplianceEntry.door_motor = false``, refuses ``SetDoor``: an arm swings it).
 
 Two channels run independently: the door (``SetDoor``: a minimum-jerk ramp of the hinge
 servo's set-point at the scenario's door speed, done within 0.03 rad of the goal) and the heater
@@ -48,7 +49,7 @@ class ApplianceController(Controller):
         self.body = model.body(entry.label).id
         joint = model.joint(f"{entry.label}/door").id
         self.qadr, self.dadr = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
-        self.act = model.actuator(f"{entry.label}/door").id
+        self.act = model.actuator(f"{entry.label}/door").id if entry.door_motor else None
         self.objects = dict(objects)
         self._labels = list(self.objects)  # the same, as arrays for contents()
         bodies = [o.body for o in self.objects.values()]
@@ -107,6 +108,8 @@ class ApplianceController(Controller):
             cmd = SetDoor(open=True)
         if not isinstance(cmd, SetDoor):
             raise CommandError(f"{self.label} (an appliance) cannot {type(cmd).__name__}")
+        if self.act is None:
+            raise CommandError(f"{self.label}: its door has no motor (an arm opens it)")
         goal = self.entry.door_open_angle if cmd.open else 0.0
         start = float(self.d.ctrl[self.act])
         period = max(0.3, PEAK_SPEED * abs(goal - start) / self.entry.door_speed)
@@ -115,6 +118,7 @@ class ApplianceController(Controller):
             self._stop_heating("the door was opened while heating")
 
     def update(self, job: Job, t: float) -> None:
+        assert self.act is not None  # begin() refused the door of a motorless appliance
         start, goal, period = self.door
         s = (t - self.started_at) / period
         job.progress = 0.95 * min(s, 1.0)
@@ -141,7 +145,8 @@ class ApplianceController(Controller):
         self._stop_heating(reason)
 
     def hold(self) -> None:
-        self.d.ctrl[self.act] = np.clip(self.angle, 0.0, self.entry.door_open_angle)
+        if self.act is not None:
+            self.d.ctrl[self.act] = np.clip(self.angle, 0.0, self.entry.door_open_angle)
 
     def settled(self) -> bool:
         return abs(float(self.d.qvel[self.dadr])) < 0.02

@@ -55,6 +55,8 @@ from device_drivers.robot_spec import RGBA, Pose2D, RobotSpec
 
 __all__ = [
     "CABINET_TOP",
+    "DOOR_HANDLE_INSET",
+    "DOOR_HANDLE_STANDOFF",
     "DRAWER_CLEARANCE",
     "ApplianceEntry",
     "ContainerEntry",
@@ -120,6 +122,10 @@ _DEFAULT_SHAPE: dict[str, FurnitureShape] = {
 }
 
 
+DOOR_HANDLE_INSET = 0.08
+"""Distance of a motorless door's handle (its centre) from the door's free edge, m."""
+DOOR_HANDLE_STANDOFF = 0.05
+"""How far out of a motorless door's outer face its handle bar stands (its centre), m."""
 CABINET_TOP = 0.02
 """Thickness of a cabinet's top board, m."""
 DRAWER_CLEARANCE = 0.01
@@ -233,6 +239,10 @@ class ApplianceEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
     door_open_angle: Annotated[float, Meta(gt=0.1, le=2.5)] = 1.75
     door_speed: Annotated[float, Meta(gt=0, le=10)] = 1.2
     """Door speed of the motor, rad/s."""
+    door_motor: bool = True
+    """False: the door has no motor (the appliance cannot open it itself); it has a bar handle
+    on its outer face instead (:data:`DOOR_HANDLE_INSET` from the free edge, at mid height,
+    :data:`DOOR_HANDLE_STANDOFF` out), for an arm to swing it (``open_door`` of an arm)."""
     heating_power: Annotated[float, Meta(ge=0, le=3000)] = 800.0
     default_heating_time: Annotated[float, Meta(gt=0, le=3600)] = 30.0
     """What the ``start`` button heats for, s."""

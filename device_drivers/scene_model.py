@@ -30,6 +30,8 @@ from device_drivers.placement import WorldPlacement, resolve_placements
 from device_drivers.robot_model import build_world
 from device_drivers.robot_spec import robot_layout
 from device_drivers.scenario import (
+    DOOR_HANDLE_INSET,
+    DOOR_HANDLE_STANDOFF,
     ApplianceEntry,
     ContainerEntry,
     FurnitureEntry,
@@ -218,7 +220,8 @@ def _appliance(world: mujoco.MjSpec, a: ApplianceEntry, p: WorldPlacement) -> No
         # the free edge sits at -side*w from the hinge; turning about +side*z moves it to +x
         axis=[0, 0, side],
         range=[0, a.door_open_angle],
-        damping=0.5,
+        damping=0.5 if a.door_motor else 1.0,
+        frictionloss=0.0 if a.door_motor else 0.2,  # a motorless door stays where it is left
         armature=0.01,
     )
     dt = 0.012
@@ -234,6 +237,9 @@ def _appliance(world: mujoco.MjSpec, a: ApplianceEntry, p: WorldPlacement) -> No
         rgba=[0.1, 0.1, 0.12, 1],
         **_VISUAL,
     )
+    if not a.door_motor:
+        _door_handle(door, a.label, 2 * dt, -side * (2 * w - DOOR_HANDLE_INSET), h / 2)
+        return
     act = world.add_actuator(
         name=f"{a.label}/door", target=f"{a.label}/door", trntype=mujoco.mjtTrn.mjTRN_JOINT
     )
@@ -242,6 +248,18 @@ def _appliance(world: mujoco.MjSpec, a: ApplianceEntry, p: WorldPlacement) -> No
     act.forcerange = [-20.0, 20.0]
     act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
     act.ctrlrange = [0.0, a.door_open_angle]
+
+
+def _door_handle(door: mujoco.MjsBody, label: str, face: float, y: float, z: float) -> None:
+    """A horizontal bar handle on a door's outer face (x = ``face`` in the door body's frame),
+    centred at (``y``, ``z``), standing :data:`DOOR_HANDLE_STANDOFF` m out on two posts."""
+    dark = [0.25, 0.25, 0.28, 1.0]
+    bar_x = face + DOOR_HANDLE_STANDOFF
+    _box(door, f"{label}/handle", [0.008, 0.06, 0.008], [bar_x, y, z], rgba=dark, mass=0.05)
+    post = (DOOR_HANDLE_STANDOFF - 0.008) / 2
+    for n, dy in enumerate((-0.045, 0.045)):
+        _box(door, f"{label}/handle_post{n}", [post, 0.005, 0.005], [face + post, y + dy, z],
+             rgba=dark, mass=0.01)  # fmt: skip
 
 
 def _fixed_camera(world: mujoco.MjSpec, sensor: SensorEntry) -> None:

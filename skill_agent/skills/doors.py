@@ -2,11 +2,13 @@
 
 The door element's pose (world) is the centre of the closed panel, its x axis pointing out of
 the front, its y axis from the hinge to the free edge; its size is (thickness, width,
-height) (``skill_agent.scenario_wm`` writes them). The handle is taken to be on the outer
-face, ``handle_inset`` m in from the free edge, at mid height. ``open_door`` grips the handle
-(tcp pointing at the face, fingers closing vertically), pulls it along the arc about the
-hinge to ``open_angle`` rad in straight segments of at most ``step`` rad, lets go and backs
-off; ``close_door`` pushes the open door's outer face back along the arc.
+height) (``skill_agent.scenario_wm`` writes them). The handle is a horizontal bar
+``handle_standoff`` m out of the outer face, ``handle_inset`` m in from the free edge, at mid
+height (the scene's motorless doors: ``ApplianceEntry.door_motor = false``). ``open_door``
+grips the bar (tcp pointing at the face, fingers closing vertically on it), pulls it along
+the arc about the hinge to ``open_angle`` rad in straight segments of at most ``step`` rad,
+lets go and backs off; ``close_door`` grips it where the open door has it and pushes it back
+along the arc.
 
 Verification is the arm's: a door that does not follow stops the arm (the motion fails with a
 collision, a time-out or an unreachable point) and the run fails. The appliance's own state
@@ -20,6 +22,7 @@ import math
 
 from device_drivers.errors import DeviceError
 from device_drivers.interfaces import Arm, ProgressCallback, WorldPose
+from device_drivers.scenario import DOOR_HANDLE_INSET, DOOR_HANDLE_STANDOFF
 from wm_store.reasoners.spatial import Transform
 from wm_store.vocab import Cls, Rel
 
@@ -35,10 +38,15 @@ __all__ = ["ArmCloseDoor", "ArmOpenDoor", "handle_pose"]
 
 
 def handle_pose(
-    door: Transform, size: tuple[float, float, float], angle: float, inset: float
+    door: Transform,
+    size: tuple[float, float, float],
+    angle: float,
+    inset: float,
+    standoff: float = 0.0,
 ) -> WorldPose:
-    """The tcp at the handle of a door opened by ``angle`` rad (0 = closed): on the outer
-    face, pointing at it, fingers closing vertically (world frame, m)."""
+    """The tcp at the handle of a door opened by ``angle`` rad (0 = closed): ``standoff`` m
+    out of the outer face (the bar of a handle), pointing at the face, fingers closing
+    vertically (world frame, m)."""
     x_d, y_d, z_d = (axis(door.rotation, i) for i in range(3))
     c = door.translation
     half_w = size[1] / 2
@@ -48,7 +56,8 @@ def handle_pose(
     along = tuple(y_d[i] * ca + x_d[i] * sa for i in range(3))
     normal = tuple(x_d[i] * ca - y_d[i] * sa for i in range(3))
     reach = size[1] - inset
-    p = tuple(hinge[i] + along[i] * reach + normal[i] * size[0] / 2 for i in range(3))
+    out = size[0] / 2 + standoff
+    p = tuple(hinge[i] + along[i] * reach + normal[i] * out for i in range(3))
     inward: Vec3 = (-normal[0], -normal[1], -normal[2])
     q = quat_from_axes(cross(z_d, inward), z_d, inward)
     return WorldPose(p[0], p[1], p[2], *q)
@@ -63,7 +72,10 @@ _PARAMS = [
     GRIPPER,
     offline("open_angle", "float", 1.4, "how far the door is swung open, rad"),
     offline("step", "float", 0.15, "largest arc step of one straight motion, rad"),
-    offline("handle_inset", "float", 0.03, "handle distance from the free edge, m"),
+    offline("handle_inset", "float", DOOR_HANDLE_INSET, "handle distance from the free edge, m"),
+    offline(
+        "handle_standoff", "float", DOOR_HANDLE_STANDOFF, "how far the handle bar stands out, m"
+    ),
 ]
 _WHERE: list[Condition] = [
     RelationCond(subject="appliance", predicate=Rel.hasA, object="door"),
@@ -84,12 +96,15 @@ class _ArmDoor(Skill):
         start, end = (0.0, full) if self.opening else (full, 0.0)
         inset = float_param(ctx, "handle_inset")
         n = max(1, math.ceil(abs(end - start) / float_param(ctx, "step")))
-        arc = [handle_pose(pose, size, start + (end - start) * k / n, inset) for k in range(n + 1)]
+        standoff = float_param(ctx, "handle_standoff")
+        arc = [
+            handle_pose(pose, size, start + (end - start) * k / n, inset, standoff)
+            for k in range(n + 1)
+        ]
         try:
             await open_gripper(gripper)
             await approach(arm, arc[0], 0.08)
-            if self.opening:
-                await close_gripper(gripper)
+            await close_gripper(gripper)
             await tracked(ctx, "swinging the door", lambda cb: _sweep(arm, arc[1:], cb), step="arc")
             await open_gripper(gripper)
             await retreat(arm, 0.08)

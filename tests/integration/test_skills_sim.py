@@ -19,6 +19,7 @@ import pytest
 
 from device_drivers.drivers import sim_devices
 from device_drivers.interfaces import Appliance
+from device_drivers.scenario import Scenario
 from device_drivers.scenario_load import load_scenario
 from device_drivers.world import SimWorld, WorldOptions, running_world
 from skill_agent.core import AgentCore, SkillEntry
@@ -86,8 +87,14 @@ class Sim:
 
 
 @asynccontextmanager
-async def simulation(name: str, seed: int = 0) -> AsyncIterator[Sim]:
+async def simulation(
+    name: str, seed: int = 0, edit: Callable[[Scenario], Scenario] | None = None
+) -> AsyncIterator[Sim]:
+    """Scenario ``name`` (changed by ``edit`` first, if given) in a fast world beside its
+    world-model scene."""
     scenario = load_scenario(SCENARIOS / name / "scenario.toml")
+    if edit is not None:
+        scenario = edit(scenario)
     ontology = Ontology.default()
     store = await WmStore.open(ontology)
     async with anyio.create_task_group() as tg:
