@@ -40,6 +40,7 @@ from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 
 import anyio
+import anyio.lowlevel
 import msgspec
 from anyio.abc import TaskStatus
 
@@ -212,10 +213,12 @@ class RunEventPublisher:
     A Zenoh put after the session was idle for a moment costs 100-200 us here (the wake-up of
     Zenoh's send path); puts back to back cost ~10 us each. So progress events and log entries
     wait (at most ``max_delay`` seconds) and go out together, and a :class:`RunResult` sends
-    everything pending at once, itself last: a short run's seven events cost about one put,
-    and no result is ever delayed. Measured: a no-op run from another process ~35% faster than
-    with one put per event as it happens (``docs/benchmarks.md``, Skills). :meth:`publish` and
-    :meth:`record` only queue (they are called inline by the core and its event log)."""
+    everything pending at once, itself last, in the loop's next turn (after a ``call``'s reply,
+    which carries the same result, has gone out): a short run's seven events cost about one
+    put, and no result waits for ``max_delay``. Measured: a no-op run from another process
+    ~35% faster than with one put per event as it happens (``docs/benchmarks.md``, Skills).
+    :meth:`publish` and :meth:`record` only queue (they are called inline by the core and its
+    event log)."""
 
     def __init__(self, mesh: Mesh, agent: str, *, max_delay: float = 0.002) -> None:
         self.mesh = mesh
@@ -224,6 +227,7 @@ class RunEventPublisher:
         self._events_key = mesh.keys.agent_events(agent)
         self._pending: list[tuple[str, bytes]] = []
         self._wake = anyio.Event()
+        self._result = anyio.Event()  # a result is pending: no waiting for company
 
     def attach(self, core: AgentCore) -> Callable[[], None]:
         """Publish ``core``'s run events and its event log; returns the detach function."""
@@ -250,9 +254,8 @@ class RunEventPublisher:
             return
         self._pending.append((key, encode(event)))
         if isinstance(event, RunResult):
-            self.flush()
-        else:
-            self._wake.set()
+            self._result.set()
+        self._wake.set()
 
     def flush(self) -> None:
         """Put every pending event now, in order (short synchronous Zenoh calls)."""
@@ -264,11 +267,18 @@ class RunEventPublisher:
                 _log.warning("could not publish on %s: %s", key, e)
 
     async def run(self) -> None:
-        """Flush progress events ``max_delay`` seconds after the first of a burst."""
+        """Flush progress events ``max_delay`` seconds after the first of a burst, and at once
+        when a result comes: right after the tasks that were waiting for it (a ``call``'s or a
+        stop's reply carries the same result) have taken their turn on the loop."""
         while True:
             await self._wake.wait()
             self._wake = anyio.Event()
-            await anyio.sleep(self.max_delay)
+            if not self._result.is_set():
+                with anyio.move_on_after(self.max_delay):
+                    await self._result.wait()
+            if self._result.is_set():
+                self._result = anyio.Event()
+                await anyio.lowlevel.checkpoint()  # let a waiting reply go out first
             self.flush()
 
 
@@ -375,7 +385,7 @@ async def serve_agent(
             task_status.started()
     finally:
         unsubscribe()
-        publisher.flush()  # progress and log of runs preempted at shutdown (results went at once)
+        publisher.flush()  # what runs preempted at shutdown left pending, their results too
         with anyio.CancelScope(shield=True):
             if token is not None:
                 with anyio.move_on_after(unregister_timeout):

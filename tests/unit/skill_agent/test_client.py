@@ -9,6 +9,7 @@ from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 
 import anyio
+import anyio.lowlevel
 import pytest
 
 from meshlink import Answer, IncomingQuery, KeySpace, Mesh, MeshConfig, open_mesh
@@ -402,6 +403,9 @@ async def test_publisher_bursts_progress_and_never_delays_a_result() -> None:
         publisher.publish(progress[0])
         result = RunResult(run_id="r1", agent="a1", skill="s", seq=3, success=True, reason="ok")
         publisher.publish(result)
+        with anyio.fail_after(2):
+            while len(mesh.puts) < 4:  # the next loop turns, not max_delay
+                await anyio.lowlevel.checkpoint()
         assert [e for _, e in mesh.puts[2:]] == [progress[0], result], "a result flushes at once"
         assert {k for k, _ in mesh.puts} == {"skimesh/m/agents/a1/runs/r1/progress"}
         tg.cancel_scope.cancel()

@@ -5,6 +5,7 @@ before the run's result."""
 from __future__ import annotations
 
 import anyio
+import anyio.lowlevel
 import pytest
 
 from meshlink import KeySpace
@@ -89,9 +90,39 @@ async def test_entries_go_out_in_the_bursts_of_the_run_events_before_the_result(
         assert mesh.entries() == ENTRIES[:2]
         publisher.record(ENTRIES[3])  # the core logs a result before it publishes it
         publisher.publish(RESULT)
+        with anyio.fail_after(2):
+            while len(mesh.puts) < 4:  # the next loop turns, not max_delay
+                await anyio.lowlevel.checkpoint()
         keys = [k for k, _ in mesh.puts[2:]]
         assert keys == ["skimesh/m/agents/a1/events", "skimesh/m/agents/a1/runs/r/progress"]
         assert decode_event(mesh.puts[-1][1]) == RESULT, "the result flushed both at once"
+        tg.cancel_scope.cancel()
+
+
+async def test_a_result_waits_for_no_company_only_for_the_reply_to_go_first() -> None:
+    """A result goes out with what is pending in the loop's next turns, long before
+    ``max_delay``; a task that was waiting for it (a ``call``'s reply) runs before the puts."""
+    mesh = RecordingMesh()
+    publisher = RunEventPublisher(mesh, "a1", max_delay=30.0)  # type: ignore[arg-type]
+    order: list[str] = []
+    done = anyio.Event()
+
+    async def replier() -> None:
+        await done.wait()
+        order.append(f"reply after {len(mesh.puts)} puts")
+
+    async with anyio.create_task_group() as tg:
+        tg.start_soon(publisher.run)
+        tg.start_soon(replier)
+        await anyio.lowlevel.checkpoint()
+        publisher.record(ENTRIES[0])
+        publisher.publish(RESULT)
+        done.set()  # the core wakes the run's waiters once the result is published
+        with anyio.fail_after(2):
+            while len(mesh.puts) < 2:
+                await anyio.lowlevel.checkpoint()
+        assert order == ["reply after 0 puts"]
+        assert decode_event(mesh.puts[-1][1]) == RESULT
         tg.cancel_scope.cancel()
 
 
