@@ -13,7 +13,8 @@ Verification, at the end of the slide: the gripper must still be closed on somet
 as the bar (the pads' gap, not a closed gripper): a handle that slipped out of the fingers
 fails the run instead of being believed, and a drawer that does not follow stops the arm (the
 motion fails).
-The drawer's new pose (and the poses of what lies in it) are written with the predicted
+The drawer's new pose (and the poses of what lies in it, as ``navigate`` moves what a robot
+carries: :func:`~skill_agent.skills.support.carried_ops`) are written with the predicted
 ``drawerOpen``.
 """
 
@@ -22,18 +23,28 @@ from __future__ import annotations
 from typing import ClassVar
 
 from device_drivers.errors import DeviceError
-from wm_store.protocol import Op, Pose, UpdateElement
+from wm_store.client import WmClient
+from wm_store.protocol import Op
 from wm_store.reasoners.spatial import Transform
 from wm_store.vocab import Cls, Prop, Rel
 
 from ..errors import SkillFailure
 from ..primitives import approach, close_gripper, move_cartesian, open_gripper, retreat
-from ..primitives.poses import axis, to_transform, to_wm_pose, to_world_pose
+from ..primitives.poses import axis, to_transform, to_world_pose
 from ..protocol import Condition, ParamSpec, PropertyCond, RelationCond, SkillDescription
 from ..skill import Skill, SkillContext
 from .manipulation import arm_of, gripper_of, make_safe
 from .params import ARM, GRIPPER, LOCATION, ROBOT, at, empty, offline
-from .support import element_id, failure, float_param, geometry, tracked, wm_of, world_transform
+from .support import (
+    carried_ops,
+    element_id,
+    failure,
+    float_param,
+    geometry,
+    tracked,
+    wm_of,
+    world_transform,
+)
 
 __all__ = ["ArmCloseDrawer", "ArmOpenDrawer", "drawer_is", "slide_ops"]
 
@@ -48,25 +59,13 @@ def drawer_is(drawer: str, open_: bool) -> PropertyCond:
     return PropertyCond(param=drawer, property=Prop.drawerOpen, op="eq", value=open_)
 
 
-def slide_ops(ctx: SkillContext, drawer: str, offset: float) -> list[Op]:
+def slide_ops(wm: WmClient, drawer: str, offset: float) -> list[Op]:
     """Ops moving ``drawer`` and everything in it ``offset`` m along the drawer's x."""
-    wm = wm_of(ctx)
-    ops: list[Op] = []
-    todo = [drawer]
-    shift: tuple[float, float, float] | None = None
-    while todo:
-        element = todo.pop()
-        todo += [child.id for child in wm.get_children(element)]
-        pose = world_transform(wm, element)
-        value = wm.get_element(element).properties.get(Prop.pose)
-        if pose is None or not isinstance(value, Pose) or value.frame or value.position.frame:
-            continue
-        if shift is None:  # the drawer itself comes first
-            x_axis = axis(pose.rotation, 0)
-            shift = (x_axis[0] * offset, x_axis[1] * offset, x_axis[2] * offset)
-        moved = Transform(shift).compose(pose)
-        ops.append(UpdateElement(id=element, properties={Prop.pose: to_wm_pose(moved)}))
-    return ops
+    pose = world_transform(wm, drawer)
+    if pose is None:
+        return []
+    dx, dy, dz = (offset * a for a in axis(pose.rotation, 0))
+    return carried_ops(wm, drawer, Transform((dx, dy, dz)), with_root=True)
 
 
 _PARAMS = [
@@ -129,7 +128,7 @@ class _ArmDrawer(Skill):
             await retreat(arm, 0.08)
         except DeviceError as exc:
             raise failure(ctx.description.name, exc) from exc
-        await wm.transact(slide_ops(ctx, drawer.element.id, sign * pull))
+        await wm.transact(slide_ops(wm, drawer.element.id, sign * pull))
 
     async def on_preempt(self, ctx: SkillContext) -> None:
         await make_safe(ctx)

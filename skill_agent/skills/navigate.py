@@ -15,7 +15,7 @@ import math
 from device_drivers.interfaces import MobileBase
 from device_drivers.robot_spec import Pose2D
 from wm_store.client import WmClient
-from wm_store.protocol import Observe, Op, Pose, UpdateElement
+from wm_store.protocol import Observe, Op, UpdateElement
 from wm_store.reasoners.spatial import Transform
 from wm_store.vocab import Prop
 
@@ -25,7 +25,16 @@ from ..primitives.poses import quat_from_yaw, to_wm_pose, yaw_of
 from ..protocol import HasPropertyCond, ParamSpec, SkillDescription
 from ..skill import Skill, SkillContext
 from .params import BASE, ROBOT, at, offline
-from .support import device, element_id, failure, float_param, tracked, wm_of, world_transform
+from .support import (
+    carried_ops,
+    device,
+    element_id,
+    failure,
+    float_param,
+    tracked,
+    wm_of,
+    world_transform,
+)
 
 __all__ = ["POSITION_TOLERANCE", "YAW_TOLERANCE", "Navigate", "follow_ops"]
 
@@ -55,17 +64,7 @@ def follow_ops(wm: WmClient, robot: str, source: str, reached: Pose2D) -> list[O
     ]
     if old is None:
         return ops
-    motion = new.compose(old.inverse())
-    todo = [robot]
-    while todo:
-        for child in wm.get_children(todo.pop()):
-            todo.append(child.id)
-            pose = child.properties.get(Prop.pose)
-            if isinstance(pose, Pose) and not (pose.frame or pose.position.frame):
-                moved = motion.compose(world_transform(wm, child.id) or Transform())
-                ops.append(UpdateElement(id=child.id, remove=[Prop.pose]))
-                ops.append(UpdateElement(id=child.id, properties={Prop.pose: to_wm_pose(moved)}))
-    return ops
+    return ops + carried_ops(wm, robot, new.compose(old.inverse()))
 
 
 class Navigate(Skill):

@@ -16,18 +16,19 @@ from anyio.abc import TaskGroup
 from device_drivers.interfaces import Device, ProgressCallback
 from wm_store.client import WmClient
 from wm_store.errors import WmError
-from wm_store.protocol import Element, Pose, Value
+from wm_store.protocol import Element, Op, Pose, UpdateElement, Value
 from wm_store.reasoners.base import MissingDataError
 from wm_store.reasoners.spatial import Transform
 from wm_store.vocab import Prop
 
 from ..errors import SkillFailure
 from ..primitives import extents
-from ..primitives.poses import Vec3
+from ..primitives.poses import Vec3, to_wm_pose
 from ..skill import SkillContext
 
 __all__ = [
     "Geometry",
+    "carried_ops",
     "device",
     "element_id",
     "failure",
@@ -76,6 +77,24 @@ def world_transform(wm: WmClient, element: str) -> Transform | None:
         return wm.spatial.world_transform(element)
     except (MissingDataError, WmError):
         return None
+
+
+def carried_ops(wm: WmClient, root: str, motion: Transform, *, with_root: bool = False) -> list[Op]:
+    """Ops applying the rigid ``motion`` (world frame) to every spatial descendant of ``root``
+    that has a world-frame pose (and to ``root`` itself ``with_root``): what a robot carries
+    when it drives, what lies in a drawer when it slides. Each pose is replaced and its old
+    observations dropped (they saw the element where it was)."""
+    ops: list[Op] = []
+    todo = [root] if with_root else [child.id for child in wm.get_children(root)]
+    while todo:
+        element = todo.pop()
+        todo += [child.id for child in wm.get_children(element)]
+        pose = wm.get_element(element).properties.get(Prop.pose)
+        if isinstance(pose, Pose) and not (pose.frame or pose.position.frame):
+            moved = motion.compose(world_transform(wm, element) or Transform())
+            ops.append(UpdateElement(id=element, remove=[Prop.pose]))
+            ops.append(UpdateElement(id=element, properties={Prop.pose: to_wm_pose(moved)}))
+    return ops
 
 
 class Geometry:
