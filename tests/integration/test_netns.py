@@ -18,17 +18,16 @@ content; restoring the cable brings r2 back (liveliness, ``available`` true agai
 
 from __future__ import annotations
 
-import json
 import time
 import uuid
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from .netns import Lab, unavailable
+from .netns_site import Site
 from .procs import ROOT, Child
 
 pytestmark = [pytest.mark.netns, pytest.mark.slow, pytest.mark.zenoh, pytest.mark.timeout(240)]
@@ -122,34 +121,6 @@ anyio.run(main, *sys.argv[1:])
 '''
 
 
-@dataclass
-class Site:
-    lab: Lab
-    mesh: str
-    folder: Path
-    children: dict[str, Child] = field(default_factory=dict)
-
-    @property
-    def endpoint(self) -> str:
-        return f"tcp/{self.lab.address('core')}:{PORT}"
-
-    def flags(self) -> list[str]:
-        return ["--connect", self.endpoint, "--mesh", self.mesh]
-
-    def start(self, name: str, host: str, *args: str, ready: str = "") -> Child:
-        child = Child(self.lab.python(host, *args), name=name)
-        self.children[name] = child
-        if ready:
-            child.wait_stderr(ready, timeout=60)
-        return child
-
-    def ask(self, probe: Child, timeout: float = 60, **cmd: Any) -> dict[str, Any]:
-        probe.send(json.dumps(cmd))
-        answer = probe.next_json(timeout)
-        assert answer is not None, f"the probe ended:\n{probe.log()}"
-        return answer
-
-
 def lease_tuned(name: str, out: Path) -> Path:
     text = (CONFIGS / name).read_text()
     assert "lease: 4000" in text, f"{name} no longer sets lease: 4000"
@@ -176,7 +147,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
         s = Site(lab, f"ns-{uuid.uuid4().hex[:8]}", folder)
         try:
             listen = ["--listen", s.endpoint, "--config", str(router_cfg)]
-            s.start("router", "core", "-m", "skimesh", "router", *listen, ready="listening")
+            s.skimesh("router", "core", "router", *listen, ready="listening")
             lab.wait_for_port("ops", lab.address("core"), PORT)
             store = ["-m", "skimesh", "wm", "--data", str(folder / "wm"), "--config", client_cfg]
             s.start("store", "core", *store, *s.flags(), ready="world model ready")

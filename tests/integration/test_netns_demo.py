@@ -26,7 +26,6 @@ import subprocess
 import time
 import uuid
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +39,8 @@ from device_drivers.scene_facts import SceneFacts, Snapshot, object_in
 from device_drivers.scene_model import build_scene
 
 from .netns import Lab, unavailable
-from .procs import ROOT, Child
+from .netns_site import Site
+from .procs import ROOT
 
 pytestmark = [
     pytest.mark.netns,
@@ -88,31 +88,9 @@ anyio.run(main, *sys.argv[1:])
 '''
 
 
-@dataclass
-class Site:
-    lab: Lab
-    mesh: str
-    folder: Path
-    children: dict[str, Child] = field(default_factory=dict)
-
-    @property
-    def endpoint(self) -> str:
-        return f"tcp/{self.lab.address('core')}:{PORT}"
-
-    def flags(self) -> list[str]:
-        return [*CLIENT, "--connect", self.endpoint, "--mesh", self.mesh]
-
-    def start(self, name: str, host: str, *args: str) -> Child:
-        child = Child(self.lab.python(host, "-m", "skimesh", *args), name=name)
-        self.children[name] = child
-        return child
-
-    def cli(self, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
-        """``skimesh ARGS`` on the operations host, to its end."""
-        return self.lab.run("ops", "-m", "skimesh", *args, timeout=timeout)
-
-    def logs(self) -> str:
-        return "\n".join(f"--- {name}\n{child.log()}" for name, child in self.children.items())
+def cli(site: Site, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
+    """``skimesh ARGS`` on the operations host, to its end."""
+    return site.lab.run("ops", "-m", "skimesh", *args, timeout=timeout)
 
 
 @pytest.fixture(scope="module")
@@ -123,21 +101,21 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
     folder = tmp_path_factory.mktemp("netns-demo")
     (folder / "grippers.py").write_text(GRIPPERS)
     with Lab(["core", "sim", "r1", "r2", "ops"]) as lab:
-        s = Site(lab, f"nsd-{uuid.uuid4().hex[:8]}", folder)
+        s = Site(lab, f"nsd-{uuid.uuid4().hex[:8]}", folder, PORT, CLIENT)
         try:
             router = ["router", "--config", str(ZENOH / "router.json5"), "--listen", s.endpoint]
-            s.start("router", "core", *router).wait_stderr("listening", timeout=60)
+            s.skimesh("router", "core", *router).wait_stderr("listening", timeout=60)
             lab.wait_for_port("ops", lab.address("core"), PORT)
             wm = ["wm", *s.flags(), "--data", str(folder / "wm"), "--scenario", "kitting"]
             sim = ["sim", *s.flags(), "--scenario", "kitting", "--fast"]
-            s.start("wm", "core", *wm)
-            s.start("sim", "sim", *sim, "--rerun", str(folder / "sim.rrd"))
+            s.skimesh("wm", "core", *wm)
+            s.skimesh("sim", "sim", *sim, "--rerun", str(folder / "sim.rrd"))
             s.children["wm"].wait_stderr("world model ready", timeout=90)
             s.children["sim"].wait_stderr("sim: scenario kitting", timeout=120)
             for robot in ("r1", "r2"):  # both at once: one registration may lose the race
                 agent = ["agent", *s.flags(), "--scenario", "kitting", "--robot", robot]
-                s.start(robot, robot, *agent)
-            s.start("task agent", "ops", "task-agent", *s.flags())
+                s.skimesh(robot, robot, *agent)
+            s.skimesh("task agent", "ops", "task-agent", *s.flags())
             for robot in ("r1", "r2"):
                 s.children[robot].wait_stderr(f"agent {robot} ready", timeout=120)
             s.children["task agent"].wait_stderr("task agent ready", timeout=90)
@@ -203,7 +181,7 @@ def wm_kits(site: Site) -> dict[str, set[str]]:
         "SELECT ?box ?part WHERE { ?b a skm:KitBox ; rdfs:label ?box ; skm:contain ?p . "
         "?p rdfs:label ?part }"
     )
-    done = site.cli("wm", *site.flags(), "sparql", query)
+    done = cli(site, "wm", *site.flags(), "sparql", query)
     assert done.returncode == 0, done.stderr
     header, *rows = done.stdout.splitlines()
     assert header.split("\t") == ["box", "part"], done.stdout
@@ -220,7 +198,7 @@ def test_the_demo_split_across_namespaces_reaches_its_goal_in_wm_and_physics(
     goal = " and ".join(SCENARIO.goals)
     t0 = time.monotonic()
     submit = ["task", "submit", *site.flags(), "--goal", goal, "--json"]
-    done = site.cli(*submit, "--deadline", str(DEADLINE), timeout=DEADLINE + 30)
+    done = cli(site, *submit, "--deadline", str(DEADLINE), timeout=DEADLINE + 30)
     took = time.monotonic() - t0
     events = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     assert done.returncode == 0, f"{done.stdout[-3000:]}\n{done.stderr}\n{site.logs()}"
