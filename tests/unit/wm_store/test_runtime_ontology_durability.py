@@ -5,13 +5,12 @@ knows them, serves them to a new replica, and keeps enforcing them."""
 from __future__ import annotations
 
 import shutil
-from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
 from pathlib import Path
 
 import anyio
 import pytest
 
+from tests.unit.wm_store.stores import running
 from wm_store.client import WmClient
 from wm_store.errors import OntologyError, PropertyValueError
 from wm_store.ontology import Ontology
@@ -31,15 +30,6 @@ from wm_store.store import StoreConfig, WmStore
 from wm_store.transport import InMemoryTransport
 
 pytestmark = pytest.mark.anyio
-
-
-@asynccontextmanager
-async def running(store: WmStore) -> AsyncIterator[WmStore]:
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        yield store
-        tg.cancel_scope.cancel()
-    await store.aclose()
 
 
 def template(mass: float) -> DefineTemplate:

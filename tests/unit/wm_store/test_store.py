@@ -2,28 +2,18 @@
 
 from __future__ import annotations
 
-from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
 from pathlib import Path
 
 import anyio
 import pytest
 
+from tests.unit.wm_store.stores import running
 from wm_store.errors import ConflictError, HistoryCompactedError, ValidationError
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Change, Relation, Transact, UpdateElement
 from wm_store.store import StoreConfig, WmStore
 
 pytestmark = pytest.mark.anyio
-
-
-@asynccontextmanager
-async def running(store: WmStore) -> AsyncIterator[WmStore]:
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        yield store
-        tg.cancel_scope.cancel()
-    await store.aclose()
 
 
 def add_gear(label: str) -> Transact:
