@@ -67,7 +67,7 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
             )
         await ctx.progress(
             f"{target.label or target.id} not seen by {sensors.names}; where the operator "
-            f"({told.source}) saw it {time.time() - told.stamp:.0f} s ago",
+            f"({_named(wm, told.source)}) saw it {time.time() - told.stamp:.0f} s ago",
             step="located",
         )
         return
@@ -80,10 +80,19 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
     best = seen[0]
     x, y, z = best.pose.translation
     await ctx.progress(
-        f"{target.label or target.id} seen by {best.source} at ({x:.3f}, {y:.3f}, {z:.3f}) "
+        f"{target.label or target.id} seen by {_named(wm, best.source)} at "
+        f"({x:.3f}, {y:.3f}, {z:.3f}) "
         f"(confidence {best.confidence:.2f}; {len(seen)} sighting(s))",
         step="located",
     )
+
+
+def _named(wm: WmClient, element: str) -> str:
+    """``label (id)`` of an element, for messages (ids alone confuse: the scene camera
+    labelled Camera-1 may have the id Camera-3); the id alone when that is all there is."""
+    found = wm.find_element(element)
+    label = found.label if found is not None else ""
+    return f"{label} ({element})" if label and label != element else element
 
 
 class Locate(Skill):
