@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import anyio
+import anyio.lowlevel
 import pytest
 
 from meshlink import open_mesh
@@ -70,6 +71,10 @@ async def test_tokens_over_zenoh(router_endpoint: str, mesh_config: MeshConfigFa
     async with fleet() as f, open_mesh(config) as watcher, open_mesh(config) as agents:
         r1 = agents.declare_token(agents.keys.agent("r1"))
         agents.declare_token(agents.keys.agent("r2"))
+        tokens = {agents.keys.agent("r1"), agents.keys.agent("r2")}
+        with anyio.fail_after(5):  # the declarations reach the router (another session's)
+            while not tokens <= set(await watcher.alive(agents.keys.agents())):
+                await anyio.lowlevel.checkpoint()
         discovery = Discovery(f.wm)
         changes: list[tuple[str, bool, float]] = []
         discovery.on_presence(lambda n, alive: changes.append((n, alive, time.perf_counter())))
