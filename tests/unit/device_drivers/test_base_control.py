@@ -146,6 +146,7 @@ async def test_set_velocity_is_clamped_to_the_bases_limits(world: SimWorld) -> N
 async def test_stop_ends_an_open_velocity_and_a_new_twist_replaces_it(world: SimWorld) -> None:
     base = r1_base(world)
     ended: list[str] = []
+    replaced = anyio.Event()
 
     async def drive(name: str, wz: float, duration: float | None = None) -> None:
         try:
@@ -153,11 +154,15 @@ async def test_stop_ends_an_open_velocity_and_a_new_twist_replaces_it(world: Sim
             ended.append(name)
         except MotionStoppedError:
             ended.append(f"{name} stopped")
+        if name == "first":
+            replaced.set()
 
     async with anyio.create_task_group() as tg:
         tg.start_soon(drive, "first", 0.5)
         await world.sleep(0.8)
         tg.start_soon(drive, "second", -0.4)
+        with anyio.fail_after(10):  # the second twist has taken over (not just been sent)
+            await replaced.wait()
         await world.sleep(1.0)
         assert ended == ["first"]  # replaced: returned normally
         assert (await base.state()).velocity.wz == pytest.approx(-0.4, abs=0.02)
