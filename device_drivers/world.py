@@ -22,20 +22,35 @@ Threading model (every crossing is here or in the modules it names):
 
 Pacing: real time (default) runs each batch when the wall clock says its ticks are due
 (``anyio.sleep`` in between); if the simulation falls behind by more than ``slip`` seconds it
-gives up catching up and counts a slip. ``fast`` runs batches back to back in one thread call
-(a *run*) that returns only when a job that reports progress advanced, when
-:meth:`SimWorld.call` waits, when the world is stopped, and after ``fast_handover`` wall
-seconds at most. Meanwhile the simulation thread posts to the loop
-(``call_soon_threadsafe``, with a snapshot of that moment) every job as it finishes, every
-:meth:`SimWorld.wait_time` alarm as it comes due, and the end of every batch; before the
-next batch starts it waits until the loop has taken those and run what was ready once (as
-the checkpoint between two batches did). So the simulation still advances in step with the
-loop, a batch at a time: a command sent in reaction to anything starts at the next batch
-boundary, exactly as if the run had returned there, and readers see a snapshot at most a
-batch old. What it saves is the thread hand-over per batch through ``anyio.to_thread`` (the
-worker's and the loop's wake-ups, 0.3-1 ms of wall time on a busy 2-core machine, as much as
-the physics of a batch of a small scene), and the loop's reactions to a finished job now
-overlap the rest of its batch. Failure: a diverged state (or any error inside a batch) stops
+gives up catching up and counts a slip. While something moves by command, a job waits or an
+alarm is near, that is every tick (10 ms); a *quiet* world sleeps until a whole batch is due
+(``batch``, 50 ms) or until news (a command, a :meth:`SimWorld.call`, an alarm) wakes it, and
+then first runs the ticks due by then, so the news starts at the present tick: an idle world
+in real time costs ~3 % of a core instead of ~13 % (one thread hand-over per 10 ms).
+
+``fast`` runs batches back to back in one thread call (a *run*) that returns only when a job
+that reports progress advanced, when :meth:`SimWorld.call` waits, when the world is stopped,
+and after ``fast_handover`` wall seconds at most. Meanwhile the simulation thread hands the
+loop two kinds of news:
+
+- **events**: a job finished, or a :meth:`SimWorld.wait_time` alarm came due. Each is posted
+  to the loop at once (:mod:`~device_drivers.loop_post`, with a snapshot of that tick), and
+  before the next batch starts the simulation waits until the loop has taken them and let the
+  tasks they woke take a step. So whatever the loop does *in reaction to the simulation* starts
+  at the next batch boundary, exactly as if the run had returned there: the same ticks,
+  however busy the loop (a test checks it bit for bit against one thread call per batch).
+- **batch ends** at which nothing happened: the new snapshot is published by reference (one
+  attribute store, atomic under the GIL; :attr:`SimWorld.snapshot` reads the newer of it and
+  the last one delivered with an event), and the next batch starts at once: no post, no
+  wake-up of the loop, no waiting. Readers on the loop see the newest snapshot there is.
+
+What this saves (measured on the meal benchmark, see ``docs/benchmarks.md``): the loop's
+wake-up per batch and the simulation's wait for it (each 0.05-0.3 ms of wall time on a busy
+2-core machine, as much as the physics of a batch of a small scene), while the loop still
+reacts to the simulation in lock-step. The loop does not step with the simulation any more
+between events: a task that polls the snapshot (rather than awaiting an event or an alarm)
+sees the simulation go on in steps of whatever it ran meanwhile, as it would in real time.
+Failure: a diverged state (or any error inside a batch) stops
 the world; every waiting and later command fails with that error.
 """
 
@@ -142,9 +157,11 @@ class SimWorld:
         self._limiter = anyio.CapacityLimiter(1)
         self._inbox: deque[Job] = deque()
         self._waiting: set[Job] = set()
-        self._snapshot = self.plant.snapshot
+        self._snapshot = self.plant.snapshot  # loop only: the last one delivered
+        self._latest = self._snapshot  # simulation thread only: the last batch end's
         self._failure: BaseException | None = None
         self._stopped = anyio.Event()
+        self._news = anyio.Event()  # real time: see _pause
         self._alarms: list[tuple[float, anyio.Event]] = []
         self._next_alarm = math.inf  # the earliest alarm: read by the simulation thread
         self._reporting = 0  # waiting jobs with a progress callback: read by it too
@@ -202,6 +219,7 @@ class SimWorld:
                 report=report,
                 wake=self._wake,
             )
+        catch_up = False  # real time: the first batch after a quiet wait takes no job
         task_status.started()
         try:
             while self._failure is None:
@@ -209,16 +227,18 @@ class SimWorld:
                     ticks = max_ticks
                     await anyio.lowlevel.checkpoint()
                 else:
-                    behind = (time.perf_counter() - wall0) - (self._snapshot.time - sim0)
+                    behind = (time.perf_counter() - wall0) - (self.snapshot.time - sim0)
                     if behind > o.slip:
                         self._stats["slips"] += 1
                         wall0 += behind - plant.tick_time
                         behind = plant.tick_time
                     ticks = min(max_ticks, math.floor(behind / plant.tick_time + 1e-9))
-                    if ticks < 1:
-                        await anyio.sleep(plant.tick_time - behind)
+                    quiet = self._quiet(max_ticks * plant.tick_time)
+                    if ticks < 1 or (quiet and ticks < max_ticks):
+                        catch_up = await self._pause((max_ticks if quiet else 1), behind, quiet)
                         continue
-                jobs = [self._inbox.popleft() for _ in range(len(self._inbox))]
+                jobs = [] if catch_up else [self._inbox.popleft() for _ in range(len(self._inbox))]
+                catch_up = False
                 started = time.perf_counter()
                 self._acks.clear()  # the reactions to those came in during the checkpoint
                 self._woken.clear()  # _complete rang them
@@ -240,6 +260,30 @@ class SimWorld:
                 self._post = None
             if self._failure is None:
                 self._fail(DeviceUnavailableError("the simulation was stopped"), [])
+
+    def _quiet(self, horizon: float) -> bool:
+        """Real time, between batches (the model is the loop's): nothing moves by command,
+        nothing is queued or waits for the model, and no alarm is due within ``horizon`` s."""
+        if self._inbox or self._calls or self._next_alarm - self.snapshot.time <= horizon:
+            return False
+        return not any(ctrl.active for ctrl in self.plant.controllers.values())
+
+    async def _pause(self, ticks: int, behind: float, quiet: bool) -> bool:
+        """Real time: wait until ``ticks`` ticks are due; a quiet world also wakes at news (a
+        command, a call, an alarm, a stop). Return whether it woke early with ticks due: those
+        then run first (a catch-up batch), so that the news starts at the present tick."""
+        wait = ticks * self.plant.tick_time - behind
+        if not quiet:
+            await anyio.sleep(wait)
+            return False
+        with anyio.move_on_after(wait) as timer:
+            await self._news.wait()
+        self._news = anyio.Event()
+        return not timer.cancelled_caught
+
+    def _tell(self) -> None:
+        """Loop: something a quiet world in real time must not sleep through happened."""
+        self._news.set()
 
     def _between_batches(self, sim_time: float) -> bool:
         """Simulation thread, between the batches of a fast run: wait until the loop has
@@ -276,9 +320,13 @@ class SimWorld:
         return bool(due)
 
     def _report(self, finished: list[Job], snapshot: Snapshot) -> None:
-        """Simulation thread: hand ``finished`` jobs, a due alarm or the end of a batch to the
-        loop now, with ``snapshot`` (see module doc); the next batch starts once the loop has
-        taken it and let the tasks it woke take a step."""
+        """Simulation thread: hand ``finished`` jobs or a due alarm to the loop now, with
+        ``snapshot``; the next batch starts once the loop has taken it and let the tasks it woke
+        take a step. The end of a batch at which neither happened is only published (see
+        module doc)."""
+        if not finished and snapshot.time < self._next_alarm:
+            self._latest = snapshot
+            return
         assert self._loop is not None
         ack = threading.Event()
         self._acks.append(ack)
@@ -296,7 +344,7 @@ class SimWorld:
     def _deliver(self, finished: list[Job], snapshot: Snapshot, ack: threading.Event) -> None:
         """Loop: wake the waiters of ``finished``; ``ack`` once they have taken a step (the
         callbacks ``call_soon`` queued before it have run, as after a checkpoint)."""
-        if snapshot.time >= self._snapshot.time:
+        if snapshot.time >= self._snapshot.time:  # (posts are taken in order: always)
             self._snapshot = snapshot
         for job in finished:
             self._forget(job)
@@ -357,16 +405,17 @@ class SimWorld:
 
     async def wait_time(self, sim_time: float) -> None:
         """Wait until the simulation clock reaches ``sim_time`` s (or the world stops)."""
-        if self._snapshot.time >= sim_time or self._failure is not None:
+        if self.snapshot.time >= sim_time or self._failure is not None:
             return
         alarm = anyio.Event()
         self._alarms.append((sim_time, alarm))
         self._next_alarm = min(self._next_alarm, sim_time)
+        self._tell()
         await alarm.wait()
 
     async def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` of simulated time."""
-        await self.wait_time(self._snapshot.time + seconds)
+        await self.wait_time(self.snapshot.time + seconds)
 
     # ------------------------------------------------------------------ commands
     async def execute(
@@ -383,6 +432,7 @@ class SimWorld:
         if progress is not None:
             self._reporting += 1
         self._inbox.append(job)
+        self._tell()
         try:
             await job.done.wait()
         except anyio.get_cancelled_exc_class():
@@ -409,7 +459,7 @@ class SimWorld:
     def state(self, device: DeviceKey) -> Any:
         """The device's state in the latest snapshot."""
         try:
-            return self._snapshot.states[device]
+            return self.snapshot.states[device]
         except KeyError:
             raise DeviceUnavailableError(
                 f"no device {device[0]}/{device[1]} with a state"
@@ -417,7 +467,10 @@ class SimWorld:
 
     @property
     def snapshot(self) -> Snapshot:
-        return self._snapshot
+        """The newest state of the world: the last batch end's, or the last one delivered with
+        an event if that is newer (see module doc). Immutable: read it once per decision."""
+        latest, delivered = self._latest, self._snapshot
+        return latest if latest.time > delivered.time else delivered
 
     @property
     def devices(self) -> dict[DeviceKey, DeviceKind]:
@@ -431,6 +484,7 @@ class SimWorld:
         returns at the next batch boundary for it)."""
         plant = self.plant
         self._calls += 1
+        self._tell()
         try:
             return await anyio.to_thread.run_sync(
                 fn, plant.model, plant.data, limiter=self._limiter
@@ -456,7 +510,7 @@ class SimWorld:
         )
 
     def _setpoints(self, ctrl: Any) -> dict[str, float]:
-        values = self._snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
+        values = self.snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
         return {j: float(v) for j, v in zip(ctrl.joints, values, strict=True)}
 
     def _build_ik(self) -> None:
@@ -486,11 +540,11 @@ class SimWorld:
     # ------------------------------------------------------------------ ground truth
     def body_pose(self, name: str) -> WorldPose:
         """World pose of a body (a label, or ``r1/gripper``) in the latest snapshot."""
-        return self._snapshot.pose(self.facts.body(name))
+        return self.snapshot.pose(self.facts.body(name))
 
     def object_in(self, label: str, container: str) -> bool:
         """Whether ``label`` lies in ``container`` now, at rest and not held."""
-        return object_in(self._snapshot, self.facts, label, container)
+        return object_in(self.snapshot, self.facts, label, container)
 
     def objects_in(self, container: str) -> list[str]:
         return [o for o in self.facts.objects if o != container and self.object_in(o, container)]
@@ -502,7 +556,7 @@ class SimWorld:
     def statistics(self) -> WorldStatistics:
         s = self._stats
         wall = time.perf_counter() - s["wall0"] if s["wall0"] else 0.0
-        sim = self._snapshot.time
+        sim = self.snapshot.time
         return WorldStatistics(
             sim_time=sim,
             wall_time=wall,

@@ -1,12 +1,14 @@
-"""Running a long-lived command: logging set-up and a clean stop on SIGINT / SIGTERM.
+"""Running a long-lived command: logging set-up, a clean stop on SIGINT / SIGTERM, a settled heap.
 
 Every ``skimesh`` service runs its main coroutine through :func:`run_service`, which cancels it
 when the process receives SIGINT or SIGTERM, so every Zenoh session is closed and the world
-model writes its final snapshot before the process exits.
+model writes its final snapshot before the process exits. These are settings of the process,
+made by its command (never by library code on import).
 """
 
 from __future__ import annotations
 
+import gc
 import logging
 import signal
 import sys
@@ -14,7 +16,7 @@ from collections.abc import Awaitable, Callable
 
 import anyio
 
-__all__ = ["configure_logging", "run_service"]
+__all__ = ["configure_logging", "run_service", "settle_heap"]
 
 
 def configure_logging(verbosity: int) -> None:
@@ -26,6 +28,22 @@ def configure_logging(verbosity: int) -> None:
         format="%(asctime)s %(levelname).1s %(name)s: %(message)s",
         datefmt="%H:%M:%S",
     )
+
+
+def settle_heap() -> None:
+    """Call once start-up is over (the world built, solvers loaded): collect, then move every
+    object alive now out of the garbage collector's generations (``gc.freeze``).
+
+    Why: a process that has loaded MuJoCo models, placo solvers and Zenoh sessions holds a
+    large heap of start-up objects that live as long as it does, and every full collection
+    scanned all of them: 40-55 ms in the simulator's process, about once per 16 simulated
+    seconds of the meal benchmark, during which the thread that happened to trigger it (the
+    simulation thread as often as not) held the GIL. Frozen, they are never scanned again;
+    objects made later are collected as usual. Nothing is leaked: the frozen objects were
+    reachable anyway.
+    """
+    gc.collect()
+    gc.freeze()
 
 
 def run_service(main: Callable[[], Awaitable[int]]) -> int:

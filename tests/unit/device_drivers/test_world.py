@@ -67,6 +67,25 @@ async def test_real_time_pacing_keeps_to_the_wall_clock() -> None:
         assert world.statistics().slips == 0
 
 
+async def test_a_quiet_world_in_real_time_runs_a_batch_at_a_time_and_wakes_for_news() -> None:
+    """Real time with nothing moving by command: batches of 50 ms (5 ticks), not one thread
+    hand-over per 10 ms tick; a command wakes it and starts within a batch of the clock."""
+    scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
+    async with running_world(scenario, WorldOptions()) as world:
+        await anyio.sleep(0.1)
+        before = world.statistics()
+        await anyio.sleep(0.5)
+        quiet = world.statistics()
+        arm = sim_devices(world, "friend")[("friend", "arm")]
+        assert isinstance(arm, SimArm)
+        issued = world.snapshot.time
+        await arm.move_joints({"elbow": 1.2}, duration=0.3)
+        started = world.plant.controllers[("friend", "arm")].started_at
+    ticks, batches = quiet.ticks - before.ticks, quiet.batches - before.batches
+    assert ticks >= 30 and ticks / batches >= 3  # a tick per batch before
+    assert 0.0 <= started - issued <= WorldOptions().batch + 1e-9
+
+
 async def test_fast_mode_runs_faster_than_real_time() -> None:
     scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
     async with running_world(scenario, FAST) as world:
@@ -230,6 +249,32 @@ async def test_an_alarm_due_at_the_end_of_a_batch_rides_on_its_report() -> None:
         tg.cancel_scope.cancel()
     assert abs(woken - 1.0) < 1e-9 and started == woken
     assert [t for t in posted if abs(t - 1.0) < 1e-9] == [woken]
+
+
+async def test_quiet_batch_ends_are_published_without_waking_the_loop() -> None:
+    """In a fast run only events (a finished job, a due alarm) are posted to the loop and
+    waited for; a batch end at which nothing happened is published by reference: the loop is
+    not woken, yet every reader sees the newest snapshot."""
+    scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
+    world = await SimWorld.create(scenario, FAST)
+    delivered: list[float] = []
+    deliver = world._deliver
+
+    def counting(finished: list[Any], snapshot: Any, ack: Any) -> None:
+        delivered.append(snapshot.time)
+        deliver(finished, snapshot, ack)
+
+    world._deliver = counting  # type: ignore[method-assign]
+    async with anyio.create_task_group() as tg:
+        await tg.start(world.run)
+        await world.wait_time(2.0 - 1e-6)  # the only event, at the end of the 20th batch
+        assert world.snapshot.time == pytest.approx(2.0)
+        seen = world.snapshot.time
+        while world.snapshot.time < seen + 1.0:  # a reader that polls between checkpoints
+            await anyio.lowlevel.checkpoint()
+        tg.cancel_scope.cancel()
+    assert delivered == [pytest.approx(2.0)]
+    assert world.statistics().batches >= 30
 
 
 async def test_a_call_runs_at_the_next_batch_boundary() -> None:
