@@ -110,9 +110,14 @@ class Row(msgspec.Struct, kw_only=True):
     target: str = ""
     met: bool | None = None
     note: str = ""
+    paired_ratio: float | None = None
+    """The ratio judged, when it is not value / baseline_value: e.g. the median of ratios of
+    pairs measured back to back (the ratio of two medians can fall the other side of a target)."""
 
     @property
     def ratio(self) -> float:
+        if self.paired_ratio is not None:
+            return self.paired_ratio
         if not self.baseline_value or math.isnan(self.baseline_value):
             return math.nan
         return self.value / self.baseline_value

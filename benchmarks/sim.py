@@ -22,7 +22,7 @@ Per scenario (method and results: ``docs/benchmarks.md``, section "Simulation"):
 2. **baseline**: a fresh copy of the same model stepped with bare ``mj_step(m, d, nstep=5)``
    per control tick, replaying the exact set-points, weld switches and gripper force limits
    the controllers produced in run 1 (recorded every tick), right after it. Ratio = overhead;
-   target < 2x. Runs 1 and 2 are repeated (``--repeat``, 3 by default; the layouts take turns
+   target < 2x. Runs 1 and 2 are repeated (``--repeat``, 5 by default; the layouts take turns
    going first): figures are medians, the ratio the median of the pairs' ratios.
 3. bare stepping at rest (no motion); real time: the same system paced by the wall clock in
    the headline layout (target: real-time factor 1, no slips); pick-and-place success;
@@ -41,6 +41,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -70,18 +71,29 @@ from device_drivers.scenario_load import load_scenario
 from device_drivers.world import WorldOptions, running_world
 
 
-def replay(scenario: Scenario, ticks: Sequence[Any]) -> tuple[float, float]:
-    """Wall and simulated seconds of stepping a fresh copy of the world through ``ticks``
-    with bare mj_step."""
+def replay(scenario: Scenario, ticks: Sequence[Any], timed_from: int = 0) -> tuple[float, float]:
+    """Wall and simulated seconds of stepping a fresh copy of the world through
+    ``ticks[timed_from:]`` with bare mj_step (see :func:`step_through`)."""
     plant = Plant(scenario)
+    wall = step_through(plant, ticks, timed_from)
+    return wall, (len(ticks) - timed_from) * plant.tick_time
+
+
+def step_through(plant: Plant, ticks: Sequence[Any], timed_from: int = 0) -> float:
+    """Step ``plant`` through the recorded ``ticks`` (:meth:`~benchmarks.sim_system.Tap.ticks`)
+    with bare ``mj_step``; return the wall seconds from tick ``timed_from`` on. From the same
+    start this is the run's physics, bit for bit (``tests/unit/benchmarks``)."""
     m, d, n = plant.model, plant.data, plant.steps_per_tick
     start = time.perf_counter()
-    for ctrl, active, force in ticks:
+    for i, (ctrl, active, force, eq) in enumerate(ticks):
+        if i == timed_from:
+            start = time.perf_counter()
         d.ctrl[:] = ctrl
         d.eq_active[:] = active
         m.actuator_forcerange[:] = force
+        m.eq_data[:] = eq
         mujoco.mj_step(m, d, nstep=n)
-    return time.perf_counter() - start, len(ticks) * plant.tick_time
+    return time.perf_counter() - start
 
 
 def at_rest(scenario: Scenario, seconds: float) -> float:
@@ -117,19 +129,29 @@ async def stop_to_halt(scenario: Scenario, repeats: int) -> list[float]:
 
 
 async def measure(
-    name: str, quick: bool, repeat: int, layouts: Sequence[str], workdir: Path
+    name: str,
+    quick: bool,
+    repeat: int,
+    layouts: Sequence[str],
+    workdir: Path,
+    period: float = 0.5,
 ) -> dict[str, Any]:
     """Runs 1 and 2 ``repeat`` times per layout (each fast run right before the replay of its
     own ticks, so that both see about the same machine; the layouts take turns going first);
-    per layout the figures are the medians, the overhead ratio the median of the pairs'."""
+    per layout the figures are the medians, the overhead ratio the median of the pairs'.
+    ``period``: the workload reads every sensor every ``period`` simulated s (0: never)."""
     scenario = load_scenario(ROOT / "configs" / "scenarios" / name / "scenario.toml")
     picks = 1 if quick else 2
     runs: dict[str, list[dict[str, Any]]] = {layout: [] for layout in layouts}
     for i in range(repeat):
         for layout in layouts if i % 2 == 0 else layouts[::-1]:
             rrd = workdir / f"{name}-{layout}-{i}.rrd"
-            fast = await full_system(scenario, layout=layout, fast=True, picks=picks, rrd=rrd)
-            bare, bare_sim = await anyio.to_thread.run_sync(replay, scenario, fast["ticks"])
+            fast = await full_system(
+                scenario, layout=layout, fast=True, picks=picks, rrd=rrd, sensor_period=period
+            )
+            bare, bare_sim = await anyio.to_thread.run_sync(
+                replay, scenario, fast["ticks"], fast["first_tick"]
+            )
             sim = fast["sim"]
             runs[layout].append(
                 {
@@ -150,6 +172,7 @@ async def measure(
         picks=picks,
         rrd=workdir / f"{name}-rt.rrd",
         limit=4 if quick else 10,
+        sensor_period=period,
     )
     halts = await stop_to_halt(scenario, 3 if quick else 10)
     every = [r for layout in layouts for r in runs[layout]]
@@ -197,7 +220,8 @@ def make_rows(results: dict[str, dict[str, Any]]) -> list[Row]:
                     baseline_value=1e3 * f["bare_wall_per_sim_s"],
                     target="< 2x",
                     met=f["overhead"] < 2.0,
-                    note=f"median of {len(f['overheads'])}; run ratios {pairs}",
+                    note=f"median of {len(f['overheads'])} pairs' ratios: {pairs}",
+                    paired_ratio=f["overhead"],
                 )
             )
         first = r["layouts"][r["real_time_layout"]]
@@ -255,7 +279,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write results as JSON")
     parser.add_argument("--scenario", action="append", choices=sorted(WORKLOADS))
     parser.add_argument(
-        "--repeat", type=int, metavar="N", help="fast runs (and replays) per scenario (3; quick: 1)"
+        "--repeat", type=int, metavar="N", help="fast runs (and replays) per scenario (5; quick: 1)"
     )
     parser.add_argument(
         "--layout",
@@ -265,6 +289,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "default: deployed and in-process)",
     )
     parser.add_argument("--in-process", action="store_true", help="the single-process layout only")
+    parser.add_argument(
+        "--sensor-period",
+        type=float,
+        default=0.5,
+        metavar="S",
+        help="the workload reads every sensor every S simulated seconds (0: never; default 0.5)",
+    )
     hidden = argparse.SUPPRESS
     parser.add_argument("--role", choices=("client", "router"), help=hidden)
     parser.add_argument("--listen", help=hidden)
@@ -277,7 +308,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.role == "client":
         args.scenario = args.scenario[0]
         return child_client(args)
-    repeat = max(1, args.repeat or (1 if args.quick else 3))
+    repeat = max(1, args.repeat or (1 if args.quick else 5))
     layouts = ["in-process"] if args.in_process else args.layout or ["deployed", "in-process"]
     info = machine_info(("mujoco", "rerun-sdk", "eclipse-zenoh", "placo"))
     conditions = {"load_start": load_average(), "calibration_ms_start": calibrate()}
@@ -286,7 +317,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="skimesh-bench-sim-") as tmp:
         for name in args.scenario or sorted(WORKLOADS):
             print(f"{name}: measuring...", file=sys.stderr, flush=True)
-            results[name] = anyio.run(measure, name, args.quick, repeat, layouts, Path(tmp))
+            run = partial(measure, period=args.sensor_period)
+            results[name] = anyio.run(run, name, args.quick, repeat, layouts, Path(tmp))
     conditions |= {"load_end": load_average(), "calibration_ms_end": calibrate()}
     rows = make_rows(results)
     print("machine: " + ", ".join(f"{k} {v}" for k, v in info.items()))

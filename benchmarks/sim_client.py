@@ -112,7 +112,8 @@ class MeshTruth:
 
 
 def child_client(args: argparse.Namespace) -> int:
-    """The client role: ``--connect ENDPOINT --mesh M --scenario S --picks N`` (module doc)."""
+    """The client role: ``--connect ENDPOINT --mesh M --scenario S --picks N --sensor-period
+    P`` (module doc)."""
     from skimesh.runtime import run_service
 
     async def main() -> int:
@@ -129,7 +130,9 @@ def child_client(args: argparse.Namespace) -> int:
             emit({"ready": os.getpid()})
             await go.wait()
             devices = await connect_devices(mesh)
-            emit({"done": await drive(MeshTruth(mesh), devices, args.scenario, args.picks)})
+            truth = MeshTruth(mesh)
+            done = await drive(truth, devices, args.scenario, args.picks, args.sensor_period)
+            emit({"done": done})
             await anyio.sleep_forever()
         return 0
 

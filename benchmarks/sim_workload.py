@@ -4,7 +4,8 @@ devices in the simulator's process or from a client process over Zenoh (``benchm
 
 *kitting*: both robots at once drive to their station and put two parts each into their kit
 box; *meal*: the wheelchair robot puts the meal box on the tray while the microwave opens,
-closes and heats 3 s. Meanwhile every sensor is read every 0.5 s of simulated time.
+closes and heats 3 s. Meanwhile every sensor is read every 0.5 s of simulated time (by
+default; ``--sensor-period``).
 """
 
 from __future__ import annotations
@@ -156,27 +157,26 @@ WORKLOADS: dict[str, Callable[[Truth, Devices, int], Awaitable[dict[str, bool]]]
 }
 
 
-async def watch(truth: Truth, devices: Devices) -> None:
-    """Every sensor reads every 0.5 s of simulated time, forever."""
+async def watch(truth: Truth, devices: Devices, period: float = 0.5) -> None:
+    """Every sensor reads every ``period`` s of simulated time, forever (0: never)."""
     sensors = [d for d in devices.values() if isinstance(d, ObjectSensor)]
-    import os
-
-    if os.environ.get("NO_WATCH"):
-        await anyio.sleep_forever()
-    if os.environ.get("SLEEP_ONLY"):
-        sensors = []
+    if period <= 0:
+        return
     while True:
         for sensor in sensors:
             await sensor.detect()
-        await truth.sleep(0.5)
+        await truth.sleep(period)
 
 
-async def drive(truth: Truth, devices: Devices, scenario: str, picks: int) -> dict[str, bool]:
-    """The scenario's workload with the sensors watched, between the window's two marks;
-    returns whether each placed object ended where it belongs."""
+async def drive(
+    truth: Truth, devices: Devices, scenario: str, picks: int, sensor_period: float = 0.5
+) -> dict[str, bool]:
+    """The scenario's workload with the sensors read every ``sensor_period`` s of simulated
+    time (0: not at all), between the window's two marks; returns whether each placed object
+    ended where it belongs."""
     async with anyio.create_task_group() as tg:
         await truth.mark(end=False)
-        tg.start_soon(watch, truth, devices)
+        tg.start_soon(watch, truth, devices, sensor_period)
         success = await WORKLOADS[scenario](truth, devices, picks)
         await truth.mark(end=True)
         tg.cancel_scope.cancel()
