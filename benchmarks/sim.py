@@ -20,8 +20,10 @@ Per scenario (method and results: ``docs/benchmarks.md``, section "Simulation"):
    *router-apart* (on request), as deployed with the router in a process of its own. Figure:
    wall time of this process per simulated second.
 2. **baseline**: a fresh copy of the same model stepped with bare ``mj_step(m, d, nstep=5)``
-   per control tick, replaying the exact set-points, weld switches and gripper force limits
-   the controllers produced in run 1 (recorded every tick), right after it. Ratio = overhead;
+   per control tick, replaying the exact set-points, weld switches, weld poses and gripper
+   force limits the controllers produced in run 1 (recorded every tick), from its start (the
+   ticks before the measured window untimed), right after it: the run's physics bit for bit
+   (:func:`step_through`). Ratio = overhead;
    target < 2x. Runs 1 and 2 are repeated (``--repeat``, 5 by default; the layouts take turns
    going first): figures are medians, the ratio the median of the pairs' ratios.
 3. bare stepping at rest (no motion); real time: the same system paced by the wall clock in
