@@ -16,7 +16,7 @@ Threading model (every crossing is here or in the modules it names):
   at a time ever holds the model, whichever pool thread it is.
 - **IK threads**: :meth:`SimWorld.solve_ik` runs placo (and DLS as fallback) on each robot's
   own solver objects through ``to_thread`` with a per-robot limiter, so checking a tool target
-  never stalls stepping.
+  never stalls stepping (:mod:`device_drivers.world_ik`).
 - **Recorder**: logs from the simulation thread (rerun's SDK batches and sends on its own
   threads); optional camera images are rendered on a thread the recorder owns.
 
@@ -75,20 +75,18 @@ import anyio.to_thread
 from msgspec import Meta, Struct
 
 from device_drivers.control import DeviceKey, Job
-from device_drivers.errors import DeviceError, DeviceUnavailableError, UnreachableError
+from device_drivers.errors import DeviceError, DeviceUnavailableError
 from device_drivers.grasp import GraspMode
-from device_drivers.ik import IKResult, TcpTarget
+from device_drivers.ik import IKResult
 from device_drivers.interfaces import ProgressCallback, WorldPose
 from device_drivers.loop_post import LoopPost, loop_post
-from device_drivers.motion_math import quat_wxyz
 from device_drivers.plant import Batch, DeviceKind, Plant
 from device_drivers.protocol import Command, Stop
 from device_drivers.scenario import Scenario
 from device_drivers.scene_facts import Snapshot, object_in
+from device_drivers.world_ik import WorldIK
 
 if TYPE_CHECKING:
-    from device_drivers.ik_dls import DlsIK
-    from device_drivers.ik_placo import PlacoIK
     from device_drivers.recorder import Recorder
 
 __all__ = ["SimWorld", "WorldOptions", "WorldStatistics", "running_world"]
@@ -171,9 +169,7 @@ class SimWorld:
         self._batch_ticks = self._ticks_left = 0  # ticks per batch, left in this one: its too
         self._loop: asyncio.AbstractEventLoop | None = None
         self._post: LoopPost | None = None  # how _report hands over (see loop_post)
-        self._ik: dict[str, tuple[PlacoIK, DlsIK]] = {}
-        self._ik_limiters = {r.name: anyio.CapacityLimiter(1) for r in scenario.robots}
-        self._build_ik()
+        self._ik = WorldIK(scenario)
         self._stats = {"slips": 0, "busy": 0.0, "wall0": 0.0, "handovers": 0}
         if recorder is not None:  # still in the constructing thread: nothing steps yet
             cameras = [
@@ -494,8 +490,8 @@ class SimWorld:
 
     # ------------------------------------------------------------------ IK
     async def solve_ik(self, robot: str, target: WorldPose, *, whole_body: bool) -> IKResult:
-        """Joint values putting ``robot``'s tool at ``target`` from its present set-points:
-        placo, then DLS if placo fails. Runs on an IK thread (see module doc).
+        """Joint values putting ``robot``'s tool at ``target`` from its present set-points
+        (:class:`~device_drivers.world_ik.WorldIK`: placo, then DLS, on an IK thread).
 
         Raises:
             UnreachableError: neither solver converged (the smaller residual is reported).
@@ -503,39 +499,11 @@ class SimWorld:
         arm = self.plant.controllers[(robot, "arm")]
         base = self.plant.controllers[(robot, "base")]
         q0 = {**self._setpoints(base), **self._setpoints(arm)}
-        w, x, y, z = (float(v) for v in quat_wxyz(target))
-        goal = TcpTarget(position=(target.x, target.y, target.z), quat=(w, x, y, z))
-        return await anyio.to_thread.run_sync(
-            self._solve, robot, q0, goal, whole_body, limiter=self._ik_limiters[robot]
-        )
+        return await self._ik.solve(robot, q0, target, whole_body=whole_body)
 
     def _setpoints(self, ctrl: Any) -> dict[str, float]:
         values = self.snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
         return {j: float(v) for j, v in zip(ctrl.joints, values, strict=True)}
-
-    def _build_ik(self) -> None:
-        """One placo and one DLS solver per robot, built with the world (~20-50 ms each):
-        built lazily, the first tool move of a fast world lost seconds of simulated time."""
-        from device_drivers.ik import IKOptions
-        from device_drivers.ik_dls import DlsIK
-        from device_drivers.ik_placo import PlacoIK
-
-        # 12 restarts, not 24: an unreachable target then costs ~50 ms of GIL-bound Python
-        # per solver instead of ~0.1 s, which the event loop feels
-        opts = IKOptions(position_tolerance=2e-4, orientation_tolerance=2e-3, restarts=12)
-        for robot in self.scenario.robots:
-            spec = robot.spec
-            self._ik[robot.name] = (PlacoIK.for_robot(spec, opts), DlsIK.for_robot(spec, opts))
-
-    def _solve(self, robot: str, q0: dict[str, float], goal: TcpTarget, whole: bool) -> IKResult:
-        placo, dls = self._ik[robot]
-        try:
-            return placo.solve(q0, goal, whole_body=whole)
-        except UnreachableError as first:
-            try:
-                return dls.solve(q0, goal, whole_body=whole)
-            except UnreachableError as second:
-                raise min(first, second, key=lambda e: e.position_error) from None
 
     # ------------------------------------------------------------------ ground truth
     def body_pose(self, name: str) -> WorldPose:
