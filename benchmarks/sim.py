@@ -27,8 +27,8 @@ Per scenario (method and results: ``docs/benchmarks.md``, section "Simulation"):
    target < 2x. Runs 1 and 2 are repeated (``--repeat``, 5 by default; the layouts take turns
    going first): figures are medians, the ratio the median of the pairs' ratios.
 3. bare stepping at rest (no motion); real time: the same system paced by the wall clock in
-   the headline layout (target: real-time factor 1, no slips); pick-and-place success;
-   stop-to-halt time.
+   the headline layout (target: real-time factor 1, no slips); the CPU an idle world costs in
+   real time (beside bare stepping at rest); pick-and-place success; stop-to-halt time.
 
 Child processes (client, router) are ``sys.executable`` children of this script (``--role``),
 on 127.0.0.1 only (free port, multicast scouting off), always stopped by their PID.
@@ -107,6 +107,16 @@ def at_rest(scenario: Scenario, seconds: float) -> float:
     return (time.perf_counter() - start) / seconds
 
 
+async def idle_real_time(scenario: Scenario, seconds: float) -> float:
+    """CPU seconds of this process per wall second while the world runs in real time with
+    nothing commanded (no recorder, no Zenoh): what an idle simulator costs its host."""
+    async with running_world(scenario, WorldOptions()) as world:
+        await world.wait_time(world.snapshot.time + 0.3)  # started and settled
+        cpu, wall = time.process_time(), time.perf_counter()
+        await anyio.sleep(seconds)
+        return (time.process_time() - cpu) / (time.perf_counter() - wall)
+
+
 async def _move_until_stopped(arm: Arm, goal: dict[str, float]) -> None:
     with contextlib.suppress(MotionStoppedError):
         await arm.move_joints(goal, duration=2.0)
@@ -177,11 +187,13 @@ async def measure(
         sensor_period=period,
     )
     halts = await stop_to_halt(scenario, 3 if quick else 10)
+    idle = await idle_real_time(scenario, 2.0 if quick else 5.0)
     every = [r for layout in layouts for r in runs[layout]]
     success = {p: all(r["success"][p] for r in every) for p in every[0]["success"]}
     return {
         "layouts": {layout: _summary(found) for layout, found in runs.items()},
         "rest_wall_per_sim_s": rest,
+        "idle_real_time_cpu": idle,
         "success": success,
         "real_time_layout": layouts[0],
         "real_time_factor": real["sim"] / real["wall"],
@@ -234,6 +246,13 @@ def make_rows(results: dict[str, dict[str, Any]]) -> list[Row]:
                 unit="x",
                 baseline="bare at rest",
                 baseline_value=1.0 / r["rest_wall_per_sim_s"],
+            ),
+            Row(
+                figure=f"{name}: CPU of an idle world in real time, % of a core",
+                value=100 * r["idle_real_time_cpu"],
+                unit="%",
+                baseline="bare stepping at rest, real time",
+                baseline_value=100 * r["rest_wall_per_sim_s"],
             ),
             Row(
                 figure=f"{name}: real-time factor, real-time mode, {r['real_time_layout']}",
