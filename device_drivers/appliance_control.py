@@ -12,9 +12,11 @@ scenario's default time without waiting, ``stop`` stops the heater, ``open`` ope
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from device_drivers.control import Controller, DeviceKey, Job
@@ -152,35 +154,56 @@ class ApplianceController(Controller):
         return abs(float(self.d.qvel[self.dadr])) < 0.02
 
     def contents(self) -> list[str]:
-        """The objects whose centre is inside the cavity (sorted labels). Every snapshot asks:
-        all objects are placed in the housing's frame at once, and the answer is kept until
-        one of them (or the housing) moves."""
-        labels, lift = self._labels, self._lift
-        if not labels:
+        """The objects whose centre is inside the cavity (sorted labels): all objects placed
+        in the housing's frame at once; the answer is kept until one of them (or the housing)
+        moves."""
+        if not self._labels:
             return []
         poses, xmat = self.d.xpos[self._watched], self.d.xmat[self._watched]
         seen = self._seen
         if seen is not None and np.array_equal(poses, seen[0]) and np.array_equal(xmat, seen[1]):
             return list(seen[2])
-        a = self.entry
+        found = self._inside(poses, xmat)
+        self._seen = (poses, xmat, found)
+        return list(found)
+
+    def _inside(self, poses: Any, xmat: Any) -> list[str]:
+        """Which watched objects (rows of ``poses``, ``xmat``; the housing last) are inside;
+        a pure function of its arguments (it may run on another thread: see capture)."""
+        a, labels, lift = self.entry, self._labels, self._lift
         rot = xmat[-1].reshape(3, 3)
         axes_z = xmat[:-1, 2::3]  # each object's z axis (the third column)
         centres = poses[:-1] + axes_z * lift[:, None] - poses[-1]
         x, y, z = (centres @ rot).T  # in the housing's frame
         d, w, h, t = a.size[0] / 2, a.size[1] / 2, a.size[2], a.wall
         inside = (-d + t <= x) & (x <= d) & (np.abs(y) <= w - t) & (t <= z) & (z <= h - t)
-        found = sorted(labels[i] for i in np.flatnonzero(inside))
-        self._seen = (poses, xmat, found)
-        return list(found)
+        return sorted(labels[i] for i in np.flatnonzero(inside))
 
     def state(self) -> ApplianceState:
-        t = float(self.d.time)
-        remaining = max(0.0, self.heat_end - t) if self.heat_job is not None else 0.0
+        return msgspec.structs.replace(self._state(), contents=self.contents())
+
+    def capture(self) -> ApplianceState | Callable[[], ApplianceState]:
+        """The state, its contents worked out when read, from copies of the poses taken now."""
+        if not self._labels:
+            return self._state()
+        poses, xmat = self.d.xpos[self._watched], self.d.xmat[self._watched]
+        return partial(_with_contents, self._state(), self._inside, poses, xmat)
+
+    def _state(self) -> ApplianceState:
+        """The state now, without its contents."""
+        remaining = 0.0
+        if self.heat_job is not None:
+            remaining = max(0.0, self.heat_end - float(self.d.time))
         angle = self.angle
         return ApplianceState(
             door_angle=angle,
             door_open=angle > _OPEN,
             heating=self.heat_job is not None,
             remaining=remaining,
-            contents=self.contents(),
         )
+
+
+def _with_contents(
+    state: ApplianceState, inside: Callable[[Any, Any], list[str]], poses: Any, xmat: Any
+) -> ApplianceState:
+    return msgspec.structs.replace(state, contents=inside(poses, xmat))

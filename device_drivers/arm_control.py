@@ -25,6 +25,8 @@ from __future__ import annotations
 import difflib
 import math
 from collections import deque
+from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -290,11 +292,21 @@ class ArmController(Controller):
         return float(np.abs(self.d.qvel[self.dadr]).max()) < 0.02
 
     def state(self) -> ArmState:
-        q = self.d.qpos[self.qadr]
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self.d.site_xmat[self.site])
-        return ArmState(
-            joints={n: float(v) for n, v in zip(self.short, q, strict=True)},
-            tcp=pose_of(self.d.site_xpos[self.site], quat),
-            moving=self.job is not None,
-        )
+        return self.capture()()
+
+    def capture(self) -> Callable[[], ArmState]:
+        d, site = self.d, self.site
+        copies = (d.qpos[self.qadr], d.site_xpos[site].copy(), d.site_xmat[site].copy())
+        return partial(_arm_state, self.short, *copies, self.job is not None)
+
+
+def _arm_state(
+    short: tuple[str, ...], q: Any, tcp_pos: Any, tcp_mat: Any, moving: bool
+) -> ArmState:
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, tcp_mat)
+    return ArmState(
+        joints={n: float(v) for n, v in zip(short, q, strict=True)},
+        tcp=pose_of(tcp_pos, quat),
+        moving=moving,
+    )

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -270,14 +271,22 @@ class BaseController(Controller):
         return slow and float(error[:2].max()) < 0.002 and float(error[2]) < 0.002
 
     def state(self) -> BaseState:
-        x, y, yaw = (float(v) for v in self.d.qpos[self.qadr])
-        vx, vy, wz = (float(v) for v in self.d.qvel[self.dadr])
-        c, s = math.cos(yaw), math.sin(yaw)
-        return BaseState(
-            pose=Pose2D(x, y, wrap(yaw)),
-            moving=self.job is not None or bool(self.owner),
-            velocity=Twist2D(_rounded(c * vx + s * vy), _rounded(c * vy - s * vx), _rounded(wz)),
-        )
+        return self.capture()()
+
+    def capture(self) -> Callable[[], BaseState]:
+        moving = self.job is not None or bool(self.owner)
+        return partial(_base_state, self.d.qpos[self.qadr], self.d.qvel[self.dadr], moving)
+
+
+def _base_state(pose: Any, twist: Any, moving: bool) -> BaseState:
+    x, y, yaw = (float(v) for v in pose)
+    vx, vy, wz = (float(v) for v in twist)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return BaseState(
+        pose=Pose2D(x, y, wrap(yaw)),
+        moving=moving,
+        velocity=Twist2D(_rounded(c * vx + s * vy), _rounded(c * vy - s * vx), _rounded(wz)),
+    )
 
 
 def _check_twist(cmd: SetVelocity) -> None:

@@ -14,6 +14,7 @@ last set-point. Nothing here may touch the event loop.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import anyio
@@ -169,3 +170,10 @@ class Controller:
 
     def state(self) -> Struct | None:
         return None
+
+    def capture(self) -> Struct | Callable[[], Struct] | None:
+        """What a snapshot keeps of this device: its state now, or a function that builds it
+        later, from copies taken now, on whichever thread first reads it (most snapshots of a
+        fast world are never read: see :class:`~device_drivers.scene_facts.DeviceStates`).
+        Default: :meth:`state`."""
+        return self.state()

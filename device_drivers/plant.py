@@ -34,7 +34,7 @@ from device_drivers.physics_options import TIMESTEP
 from device_drivers.placement import footprints, resolve_placements
 from device_drivers.robot_spec import MjcfArm, robot_layout
 from device_drivers.scenario import Scenario
-from device_drivers.scene_facts import SceneFacts, Snapshot
+from device_drivers.scene_facts import DeviceStates, SceneFacts, Snapshot
 from device_drivers.scene_model import build_scene, weld_name
 from device_drivers.sensing import CameraController, PlatformController
 from device_drivers.sim_health import DEFAULT_MAX_ACCELERATION, check_state
@@ -282,7 +282,7 @@ class Plant:
         d = self.data
         states = {}
         for key, ctrl in self.controllers.items():
-            state = ctrl.state()
+            state = ctrl.capture()
             if state is not None:
                 states[key] = state
         labels, dofs = self._free
@@ -296,7 +296,7 @@ class Plant:
         )
         return Snapshot(
             time=float(d.time),
-            states=states,
+            states=DeviceStates(states),
             body_pos=d.xpos.copy(),
             body_quat=d.xquat.copy(),
             ctrl=d.ctrl.copy(),
