@@ -50,8 +50,9 @@ wake-up per batch and the simulation's wait for it (each 0.05-0.3 ms of wall tim
 reacts to the simulation in lock-step. The loop does not step with the simulation any more
 between events: a task that polls the snapshot (rather than awaiting an event or an alarm)
 sees the simulation go on in steps of whatever it ran meanwhile, as it would in real time.
-Failure: a diverged state (or any error inside a batch) stops
-the world; every waiting and later command fails with that error.
+
+Failure: a diverged state (or any error inside a batch) stops the world; every waiting and
+later command fails with that error.
 """
 
 from __future__ import annotations
