@@ -24,7 +24,7 @@ Per scenario (method and results: ``docs/benchmarks.md``, section "Simulation"):
    force limits the controllers produced in run 1 (recorded every tick), from its start (the
    ticks before the measured window untimed), right after it: the run's physics bit for bit
    (:func:`step_through`). Ratio = overhead;
-   target < 2x. Runs 1 and 2 are repeated (``--repeat``, 5 by default; the layouts take turns
+   target < 2x. Runs 1 and 2 are repeated (``--repeat``, 9 by default; the layouts take turns
    going first): figures are medians, the ratio the median of the pairs' ratios.
 3. bare stepping at rest (no motion); real time: the same system paced by the wall clock in
    the headline layout (target: real-time factor 1, no slips); the CPU an idle world costs in
@@ -300,7 +300,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write results as JSON")
     parser.add_argument("--scenario", action="append", choices=sorted(WORKLOADS))
     parser.add_argument(
-        "--repeat", type=int, metavar="N", help="fast runs (and replays) per scenario (5; quick: 1)"
+        "--repeat", type=int, metavar="N", help="fast runs (and replays) per scenario (9; quick: 1)"
     )
     parser.add_argument(
         "--layout",
@@ -329,7 +329,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.role == "client":
         args.scenario = args.scenario[0]
         return child_client(args)
-    repeat = max(1, args.repeat or (1 if args.quick else 5))
+    repeat = max(1, args.repeat or (1 if args.quick else 9))
     layouts = ["in-process"] if args.in_process else args.layout or ["deployed", "in-process"]
     info = machine_info(("mujoco", "rerun-sdk", "eclipse-zenoh", "placo"))
     conditions = {"load_start": load_average(), "calibration_ms_start": calibrate()}
