@@ -1,7 +1,7 @@
 """Simulation benchmark: each scenario with every robot and driver working, beside bare
 ``mj_step`` of the same model driven by the same set-points, in the same run.
 
-    python -m benchmarks.sim                         # full run (~1 min on 2 cores)
+    python -m benchmarks.sim                         # full run (~2.5 min on 2 cores)
     python -m benchmarks.sim --quick                 # smoke run
     python -m benchmarks.sim --in-process            # the single-process layout only
     python -m benchmarks.sim --layout router-apart   # any layouts, the first one headline
