@@ -22,16 +22,16 @@ from typing import Annotated, Any, Literal, TypeAlias
 import msgspec
 from msgspec import Meta, Struct
 
-from device_drivers import errors
-from device_drivers.interfaces import (
+from device_drivers import _errors as errors
+from device_drivers._interfaces import (
     ApplianceState,
     ArmState,
     BaseState,
     Detection,
     GripperState,
+    Pose2D,
     WorldPose,
 )
-from device_drivers.robot_spec import Pose2D
 
 __all__ = [
     "SCHEMA_VERSION",

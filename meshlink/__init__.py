@@ -4,7 +4,7 @@ Start with :func:`open_mesh` (a :class:`MeshConfig` in, a :class:`Mesh` out); ke
 ``mesh.keys`` (:class:`KeySpace`). Every error derives from :class:`MeshlinkError`.
 """
 
-from .config import (
+from ._config import (
     DEFAULT_ROUTER_ENDPOINT,
     MeshConfig,
     Mode,
@@ -13,7 +13,7 @@ from .config import (
     mesh_config_from_args,
     to_zenoh_config,
 )
-from .errors import (
+from ._errors import (
     ConfigError,
     InvalidKeyError,
     MeshlinkError,
@@ -21,9 +21,9 @@ from .errors import (
     RemoteError,
     SessionError,
 )
-from .keyexpr import intersects
-from .keys import KeySpace, check_name
-from .messages import (
+from ._keyexpr import intersects
+from ._keys import KeySpace, check_name
+from ._messages import (
     Answer,
     IncomingQuery,
     Liveness,
@@ -32,11 +32,11 @@ from .messages import (
     Sample,
     SubscriptionStatistics,
 )
-from .publish import MeshPublisher, MeshToken
-from .router import router_config, run_router
-from .serving import Handler
-from .session import Mesh, open_mesh
-from .subscription import Subscription
+from ._publish import MeshPublisher, MeshToken
+from ._router import router_config, run_router
+from ._serving import Handler
+from ._session import Mesh, open_mesh
+from ._subscription import Subscription
 
 __all__ = [
     "DEFAULT_ROUTER_ENDPOINT",

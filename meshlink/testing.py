@@ -1,6 +1,9 @@
 """Helpers for tests of any skimesh package (no pytest import; ``tests/conftest.py`` wraps
-them in fixtures): a free loopback port, an in-process Zenoh router, and a watchdog that
-measures how long the event loop was blocked.
+them in fixtures): a free loopback port, an in-process Zenoh router, a watchdog that measures
+how long the event loop was blocked, raw Zenoh calls for benchmarks (:func:`call0`,
+:func:`undeclare`), and fuzzing of RPC queryables (:func:`hostile_payloads`,
+:func:`payloads`, :func:`check_reply`, :func:`fuzz_queryable`; hypothesis is imported only by
+:func:`payloads`).
 """
 
 from __future__ import annotations
@@ -8,19 +11,37 @@ from __future__ import annotations
 import os
 import socket
 import time
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncIterator, Iterable, Iterator, Sequence
 from contextlib import asynccontextmanager, contextmanager
+from typing import TYPE_CHECKING, Any
 
 import anyio
+import msgspec
 import zenoh
 
-from .bridge import call0
-from .config import MeshConfig, to_zenoh_config
-from .messages import Answer, IncomingQuery
-from .router import router_config
-from .session import open_mesh
+from ._bridge import call0, undeclare
+from ._config import MeshConfig, to_zenoh_config
+from ._messages import Answer, IncomingQuery
+from ._router import router_config
+from ._session import Mesh, open_mesh
+from .rpc import DEFAULT_MAX_REQUEST_BYTES, Decoder, ErrorReply, WireError
 
-__all__ = ["LoopWatch", "free_port", "remote_peer_main", "running_router", "watch_loop"]
+if TYPE_CHECKING:
+    from hypothesis.strategies import SearchStrategy
+
+__all__ = [
+    "LoopWatch",
+    "call0",
+    "check_reply",
+    "free_port",
+    "fuzz_queryable",
+    "hostile_payloads",
+    "payloads",
+    "remote_peer_main",
+    "running_router",
+    "undeclare",
+    "watch_loop",
+]
 
 
 def free_port() -> int:
@@ -36,7 +57,7 @@ def free_port() -> int:
 def running_router(*, attempts: int = 5) -> Iterator[str]:
     """Run a Zenoh router in this process on ``tcp/127.0.0.1:<free port>`` (multicast
     scouting off) and yield its endpoint; the router session is closed on exit.
-    Synchronous: opening takes ~1 ms and does not need an event loop.
+    Synchronous: opening a router is quick and does not need an event loop.
 
     Raises:
         zenoh.ZError: no free port could be bound in ``attempts`` tries.
@@ -105,3 +126,144 @@ def remote_peer_main(config: MeshConfig, token_key: str, serve_key: str) -> None
                 await anyio.sleep_forever()
 
     anyio.run(main)
+
+
+# ---------------------------------------------------------------- fuzzing RPC queryables
+
+_MARK = "zzzz-meshlink-fuzz-mark-zzzz"  # 28 characters: one fixstr header byte (0xbc)
+_MARK_BYTES = msgspec.msgpack.encode(_MARK)
+_DEEP = b"\x81\xa1a" * 1000 + b"\xc0"  # a map nested 1,000 deep
+_DEEP_ARRAY = b"\x91" * 1000 + b"\xc0"
+_BAD_UTF8 = _MARK_BYTES[:1] + b"\xff\xfe\xc3\x28" + b"a" * (len(_MARK) - 4)  # same length
+
+
+def _splice(template: Any, replacement: bytes) -> bytes:
+    """``template`` (holding the string :data:`_MARK` somewhere) encoded, with the encoded
+    mark replaced by raw ``replacement`` bytes (which msgspec could not encode itself)."""
+    return msgspec.msgpack.encode(template).replace(_MARK_BYTES, replacement)
+
+
+def _mutations(sample: bytes) -> list[bytes]:
+    """Hostile variants of one valid request: each string and each value replaced in turn by
+    invalid UTF-8 or 1,000-deep nesting, the tag made unknown, the bytes truncated."""
+    out = [sample[:-1], sample + b"\xc0", sample[: len(sample) // 2]]
+    try:
+        message = msgspec.msgpack.decode(sample)
+    except (msgspec.MsgspecError, UnicodeDecodeError, RecursionError):
+        return out
+    if isinstance(message, dict):
+        for key in list(message):
+            for value in (_MARK, {_MARK: 1}, [_MARK]):
+                changed = {**message, key: value}
+                out += [_splice(changed, _BAD_UTF8), _splice(changed, _DEEP)]
+            out.append(
+                _splice({**{k: v for k, v in message.items() if k != key}, _MARK: 1}, _BAD_UTF8)
+            )
+            if isinstance(message[key], str):
+                out.append(msgspec.msgpack.encode({**message, key: "NoSuchTag"}))
+            out.append(msgspec.msgpack.encode({k: v for k, v in message.items() if k != key}))
+    return out
+
+
+def hostile_payloads(
+    samples: Iterable[bytes] = (), *, huge: int = DEFAULT_MAX_REQUEST_BYTES + 1
+) -> list[bytes]:
+    """Fixed hostile request payloads: empty, undecodable bytes, invalid UTF-8 strings (as a
+    value, a key, a tag), maps and arrays nested 1,000 deep, unknown tags, a payload of
+    ``huge`` bytes (default: one byte over the default limit; 0 leaves it out), plus the
+    mutations of each valid ``samples`` request (see :func:`_mutations`)."""
+    out = [
+        b"",
+        b"\xc1",  # a byte MessagePack never uses
+        b"\xff" * 16,
+        b"\x81",  # a map with its entry missing
+        b"\xdf\xff\xff\xff\xff",  # a map announcing 4 billion entries
+        _DEEP,
+        _DEEP_ARRAY,
+        _splice(_MARK, _BAD_UTF8),
+        _splice({"request": _MARK}, _BAD_UTF8),
+        _splice({"reply": _MARK}, _BAD_UTF8),
+        _splice({_MARK: 1}, _BAD_UTF8),
+        _splice({"request": "Info", "x": _MARK}, _DEEP),
+        msgspec.msgpack.encode({"request": "NoSuchRequest"}),
+        msgspec.msgpack.encode({"cmd": "no_such_command"}),
+        msgspec.msgpack.encode([1, 2, 3]),
+        msgspec.msgpack.encode(None),
+    ]
+    if huge:
+        out.append(b"\x00" * huge)
+        out.append(msgspec.msgpack.encode({"request": "x" * huge}))
+    for sample in samples:
+        out += _mutations(sample)
+    return out
+
+
+def payloads(samples: Sequence[bytes] = ()) -> SearchStrategy[bytes]:
+    """A hypothesis strategy of request payloads: the :func:`hostile_payloads` (without the
+    huge ones: send those once, not per example), random bytes, random MessagePack values,
+    and the valid ``samples`` themselves."""
+    from hypothesis import strategies as st
+
+    scalars = (
+        st.none()
+        | st.booleans()
+        | st.integers(-(2**63), 2**64 - 1)
+        | st.floats()
+        | st.text()
+        | st.binary()
+    )
+    values = st.recursive(
+        scalars,
+        lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(), inner, max_size=4),
+        max_leaves=16,
+    )
+    fixed = hostile_payloads(samples, huge=0) + list(samples)
+    return st.sampled_from(fixed) | st.binary(max_size=256) | values.map(msgspec.msgpack.encode)
+
+
+def check_reply(payload: bytes, ok: bool, replies: Decoder[Any]) -> object:
+    """Assert that one reply is an :class:`~meshlink.rpc.ErrorReply` (``ok`` False) or a
+    valid non-error reply of the service (``ok`` True, decoded with ``replies``, a
+    :class:`~meshlink.rpc.Decoder` of the service's reply union); return it decoded.
+
+    Raises:
+        AssertionError: the reply is plain text, undecodable, or its kind disagrees with ``ok``.
+    """
+    if not ok:
+        try:
+            return Decoder[ErrorReply](ErrorReply).decode(payload)
+        except WireError as exc:
+            raise AssertionError(
+                f"error reply is no ErrorReply: {payload[:200]!r} ({exc})"
+            ) from None
+    try:
+        reply = replies.decode(payload)
+    except WireError as exc:
+        raise AssertionError(f"reply does not decode: {payload[:200]!r} ({exc})") from None
+    if isinstance(reply, ErrorReply):
+        raise AssertionError(f"an ErrorReply sent as an ok reply: {reply!r}")
+    return reply
+
+
+async def fuzz_queryable(
+    mesh: Mesh,
+    key: str,
+    replies: Decoder[Any],
+    requests: Iterable[bytes],
+    *,
+    timeout: float = 10.0,
+) -> int:
+    """Send every payload of ``requests`` to ``key`` (a :meth:`Mesh.get`, so several servers
+    are all checked) and :func:`check_reply` every reply; return the number of replies.
+
+    Raises:
+        AssertionError: a reply is no ErrorReply nor a valid reply, or nobody replied.
+    """
+    count = 0
+    for payload in requests:
+        answers = await mesh.get(key, payload, timeout=timeout)
+        assert answers, f"no reply from {key} to {payload[:80]!r}"
+        for answer in answers:
+            check_reply(answer.payload, answer.ok, replies)
+            count += 1
+    return count

@@ -1,9 +1,9 @@
-"""Generate ``wm_store/vocab.py``: a name constant for every class, relation, data property and
-template of the core ontology, so code never carries a misspelt name (SkiROS generated its URI
-constants the same way).
+"""Generate ``wm_store/ontology/_vocab.py``: a name constant for every class, relation, data
+property and template of the core ontology, so code never carries a misspelt name (SkiROS
+generated its URI constants the same way).
 
-    python scripts/gen_vocab.py            # rewrite wm_store/vocab.py
-    python scripts/gen_vocab.py --check    # exit 1 if wm_store/vocab.py is stale
+    python scripts/gen_vocab.py            # rewrite wm_store/ontology/_vocab.py
+    python scripts/gen_vocab.py --check    # exit 1 if wm_store/ontology/_vocab.py is stale
 
 Run it after every change to ``ontologies/skimesh.ttl``; ``tests/unit/wm_store/test_vocab.py``
 fails while the file is stale.
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from wm_store.ontology import Ontology
 
 ROOT = Path(__file__).resolve().parent.parent
-VOCAB = ROOT / "wm_store" / "vocab.py"
+VOCAB = ROOT / "wm_store" / "ontology" / "_vocab.py"
 
 HEADER = '''"""Name constants of the core ontology (``ontologies/skimesh.ttl``): use ``Cls.KitBox``,
 ``Rel.contain``, ``Prop.graspWidth``, ``Tpl.DefaultGear`` instead of string literals, so a typo
@@ -54,7 +54,7 @@ def _block(title: str, doc: str, names: Iterable[str]) -> str:
 
 
 def render(ontology: Ontology) -> str:
-    """The text of ``wm_store/vocab.py`` for ``ontology`` (ruff-format clean)."""
+    """The text of ``wm_store/ontology/_vocab.py`` for ``ontology`` (ruff-format clean)."""
     blocks = [
         HEADER.format(namespace=str(ontology.namespace)),
         _block("Cls", "Classes (``owl:Class``).", ontology.classes),
@@ -68,7 +68,9 @@ def render(ontology: Ontology) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--check", action="store_true", help="exit 1 if the output is stale")
-    parser.add_argument("--output", type=Path, default=VOCAB, help="default: wm_store/vocab.py")
+    parser.add_argument(
+        "--output", type=Path, default=VOCAB, help="default: wm_store/ontology/_vocab.py"
+    )
     parser.add_argument("--ontology", type=Path, help="default: ontologies/skimesh.ttl")
     args = parser.parse_args(argv)
     if str(ROOT) not in sys.path:  # run as a plain script from a source checkout

@@ -1,197 +1,81 @@
 """skimesh skill layer: the skill model, the async skill agent runtime and its Zenoh adapter.
 
-Layers inside the package (pure core first, adapters last)::
+The top level is what a skill writer imports: the implementation contract (:class:`Skill`,
+:class:`SkillContext`, :class:`WorldView`), composite skills (:class:`CompositeSkill` and its
+nodes) and the error tree (every exception of the package derives from :class:`SkillError`).
+The concepts are sub-packages whose faces are their public paths (pure core first, adapters
+last)::
 
-    protocol, errors             wire schema (descriptions, requests, run events) and error tree
-    skill                        the implementation contract: Skill, SkillContext, WorldView
-    conditions, params,          conditions (evaluate / effects / planner atoms), parameter
-    param_states, inference      specification, states and inference, load-time checks
-    run, run_wm, resources,      one run's lifecycle, its recorded world-model view, device
-    events, simulated,           locks, the event log, simulated outcomes, composite skills,
-    composite, core              AgentCore
-    config, plugins              agent config (TOML), skill plug-ins (entry points, paths, reload)
-    server, client, adapter      Zenoh: serve an agent, call one, drive external services
-    event_feed                   Zenoh: read agents' event logs (``agents/*/events``)
+    protocol      wire schema: skill descriptions, conditions, runs, requests, event-log entries
+    conditions    evaluation against the world model, predicted effects, planner atoms
+    parameters    specification of a run's parameters, their states, inference, load checks
+    runtime       AgentCore and one run's lifecycle, device locks, the event log, simulated
+                  outcomes, agent config (TOML), skill plug-ins, wiring drivers to elements
+    server        Zenoh: serve an agent (``skimesh agent``)
+    client        Zenoh: call an agent's skills, read agents' event logs
+    external      Zenoh: a skill that drives an external goal / feedback / cancel service
+    primitives    motion primitives and grasp planning over the device interfaces
+    skills        the standard skill library (one module per skill family, ``module:Class``)
 
 Write a skill: docs/guides/write-a-skill.md.
 """
 
-from .adapter import ExternalServiceSkill as ExternalServiceSkill
-from .adapter import external_skill as external_skill
-from .client import AgentClient as AgentClient
-from .client import find_skills as find_skills
-from .client import list_agents as list_agents
-from .composite import CompositeSkill as CompositeSkill
-from .composite import Parallel as Parallel
-from .composite import Retry as Retry
-from .composite import Selector as Selector
-from .composite import Sequence as Sequence
-from .composite import Step as Step
-from .conditions import Atom as Atom
-from .conditions import ConditionRegistry as ConditionRegistry
-from .conditions import CustomCondition as CustomCondition
-from .conditions import Verdict as Verdict
-from .conditions import effects as effects
-from .conditions import evaluate as evaluate
-from .conditions import evaluate_all as evaluate_all
-from .conditions import parameters_of as parameters_of
-from .conditions import symbolic as symbolic
-from .config import AgentConfig as AgentConfig
-from .config import load_config as load_config
-from .core import AgentCore as AgentCore
-from .core import SkillEntry as SkillEntry
-from .errors import AgentTransportError as AgentTransportError
-from .errors import InferenceError as InferenceError
-from .errors import ParameterError as ParameterError
-from .errors import ParameterTypeError as ParameterTypeError
-from .errors import PreconditionError as PreconditionError
-from .errors import RemoteSkillError as RemoteSkillError
-from .errors import ResourceBusyError as ResourceBusyError
-from .errors import RunStateError as RunStateError
-from .errors import SkillError as SkillError
-from .errors import SkillFailure as SkillFailure
-from .errors import SkillLoadError as SkillLoadError
-from .errors import UnknownParameterError as UnknownParameterError
-from .errors import UnknownRunError as UnknownRunError
-from .errors import UnknownSkillError as UnknownSkillError
-from .errors import UnspecifiedParameterError as UnspecifiedParameterError
-from .event_feed import EventFeed as EventFeed
-from .events import EventLog as EventLog
-from .params import Specified as Specified
-from .params import check_description as check_description
-from .params import specify as specify
-from .plugins import ENTRY_POINT_GROUP as ENTRY_POINT_GROUP
-from .plugins import SkillRegistry as SkillRegistry
-from .protocol import AgentReply as AgentReply
-from .protocol import AgentRequest as AgentRequest
-from .protocol import AndCond as AndCond
-from .protocol import Condition as Condition
-from .protocol import CustomCond as CustomCond
-from .protocol import EmptyCond as EmptyCond
-from .protocol import ErrorReply as ErrorReply
-from .protocol import HasPropertyCond as HasPropertyCond
-from .protocol import IsSpecifiedCond as IsSpecifiedCond
-from .protocol import IsTypeCond as IsTypeCond
-from .protocol import ListRuns as ListRuns
-from .protocol import ListSkills as ListSkills
-from .protocol import LogEntry as LogEntry
-from .protocol import NotCond as NotCond
-from .protocol import OkReply as OkReply
-from .protocol import OrCond as OrCond
-from .protocol import ParamSpec as ParamSpec
-from .protocol import PauseRun as PauseRun
-from .protocol import Progress as Progress
-from .protocol import PropertyCond as PropertyCond
-from .protocol import RelationCond as RelationCond
-from .protocol import Reload as Reload
-from .protocol import ResumeRun as ResumeRun
-from .protocol import RunEvent as RunEvent
-from .protocol import RunInfo as RunInfo
-from .protocol import RunResult as RunResult
-from .protocol import RunsReply as RunsReply
-from .protocol import RunStarted as RunStarted
-from .protocol import RunStatus as RunStatus
-from .protocol import SkillDescription as SkillDescription
-from .protocol import SkillsReply as SkillsReply
-from .protocol import StartRun as StartRun
-from .protocol import StopRun as StopRun
-from .resources import ResourceLocks as ResourceLocks
-from .run import RunContext as RunContext
-from .server import AgentService as AgentService
-from .server import run_agent as run_agent
-from .server import serve_agent as serve_agent
-from .simulated import SimulatedOutcomes as SimulatedOutcomes
-from .skill import Skill as Skill
-from .skill import SkillContext as SkillContext
-from .skill import WorldView as WorldView
+from ._composite import CompositeSkill as CompositeSkill
+from ._composite import Node as Node
+from ._composite import Parallel as Parallel
+from ._composite import Retry as Retry
+from ._composite import Selector as Selector
+from ._composite import Sequence as Sequence
+from ._composite import Step as Step
+from ._composite import check_composite as check_composite
+from ._errors import AgentInternalError as AgentInternalError
+from ._errors import AgentTransportError as AgentTransportError
+from ._errors import BadRequestError as BadRequestError
+from ._errors import InferenceError as InferenceError
+from ._errors import ParameterError as ParameterError
+from ._errors import ParameterTypeError as ParameterTypeError
+from ._errors import PreconditionError as PreconditionError
+from ._errors import RemoteSkillError as RemoteSkillError
+from ._errors import ResourceBusyError as ResourceBusyError
+from ._errors import RunStateError as RunStateError
+from ._errors import SkillError as SkillError
+from ._errors import SkillFailure as SkillFailure
+from ._errors import SkillLoadError as SkillLoadError
+from ._errors import UnknownParameterError as UnknownParameterError
+from ._errors import UnknownRunError as UnknownRunError
+from ._errors import UnknownSkillError as UnknownSkillError
+from ._errors import UnspecifiedParameterError as UnspecifiedParameterError
+from ._skill import Skill as Skill
+from ._skill import SkillContext as SkillContext
+from ._skill import WorldView as WorldView
 
 __all__ = [
-    "ENTRY_POINT_GROUP",
-    "AgentClient",
-    "AgentConfig",
-    "AgentCore",
-    "AgentReply",
-    "AgentRequest",
-    "AgentService",
+    "AgentInternalError",
     "AgentTransportError",
-    "AndCond",
-    "Atom",
+    "BadRequestError",
     "CompositeSkill",
-    "Condition",
-    "ConditionRegistry",
-    "CustomCond",
-    "CustomCondition",
-    "EmptyCond",
-    "ErrorReply",
-    "EventFeed",
-    "EventLog",
-    "ExternalServiceSkill",
-    "HasPropertyCond",
     "InferenceError",
-    "IsSpecifiedCond",
-    "IsTypeCond",
-    "ListRuns",
-    "ListSkills",
-    "LogEntry",
-    "NotCond",
-    "OkReply",
-    "OrCond",
+    "Node",
     "Parallel",
-    "ParamSpec",
     "ParameterError",
     "ParameterTypeError",
-    "PauseRun",
     "PreconditionError",
-    "Progress",
-    "PropertyCond",
-    "RelationCond",
-    "Reload",
     "RemoteSkillError",
     "ResourceBusyError",
-    "ResourceLocks",
-    "ResumeRun",
     "Retry",
-    "RunContext",
-    "RunEvent",
-    "RunInfo",
-    "RunResult",
-    "RunStarted",
     "RunStateError",
-    "RunStatus",
-    "RunsReply",
     "Selector",
     "Sequence",
-    "SimulatedOutcomes",
     "Skill",
     "SkillContext",
-    "SkillDescription",
-    "SkillEntry",
     "SkillError",
     "SkillFailure",
     "SkillLoadError",
-    "SkillRegistry",
-    "SkillsReply",
-    "Specified",
-    "StartRun",
     "Step",
-    "StopRun",
     "UnknownParameterError",
     "UnknownRunError",
     "UnknownSkillError",
     "UnspecifiedParameterError",
-    "Verdict",
     "WorldView",
-    "check_description",
-    "effects",
-    "evaluate",
-    "evaluate_all",
-    "external_skill",
-    "find_skills",
-    "list_agents",
-    "load_config",
-    "parameters_of",
-    "run_agent",
-    "serve_agent",
-    "specify",
-    "symbolic",
+    "check_composite",
 ]

@@ -26,9 +26,9 @@ Start-up order: core running -> queryables -> token -> registration in the world
 robot, devices, skills: :meth:`WmClient.register_robot`; the presence monitor of the store then
 keeps ``available`` equal to the token) -> wiring: the drivers given (by label: in-process
 drivers of a simulated world, or Zenoh proxies from
-:func:`~device_drivers.remote_client.connect_devices`) are bound to the elements of the
+:func:`~device_drivers.remote.connect_devices`) are bound to the elements of the
 registered robot and devices, and the configuration's ``[hardware]`` bindings to theirs
-(:mod:`skill_agent.wiring`). Stop (cancellation): every run is preempted and its result
+(:mod:`skill_agent.runtime`). Stop (cancellation): every run is preempted and its result
 published, then, shielded, the agent unregisters and the token is undeclared.
 """
 
@@ -44,14 +44,8 @@ import anyio.lowlevel
 import msgspec
 from anyio.abc import TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError
-from meshlink.keys import check_name
-from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
-from wm_store.ontology import Ontology, core_ontology_path
-
-from .config import AgentConfig
-from .core import AgentCore
-from .errors import (
+from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError, check_name
+from skill_agent._errors import (
     AgentInternalError,
     BadRequestError,
     ParameterError,
@@ -59,17 +53,15 @@ from .errors import (
     SkillError,
     UnknownRunError,
 )
-from .events import EventLog
-from .plugins import SkillRegistry
-from .protocol import (
+from skill_agent.protocol._codec import decode_request, encode
+from skill_agent.protocol._log import LogEntry
+from skill_agent.protocol._runs import (
     AgentReply,
     AgentRequest,
     ErrorReply,
     ListRuns,
     ListSkills,
-    LogEntry,
     OkReply,
-    ParamState,
     PauseRun,
     Reload,
     ResumeRun,
@@ -79,15 +71,19 @@ from .protocol import (
     RunResult,
     RunsReply,
     RunStatus,
-    SkillDescription,
     SkillsReply,
     StartRun,
     StopRun,
-    decode_request,
-    encode,
 )
-from .simulated import SimulatedOutcomes
-from .wiring import bind_devices, bind_hardware
+from skill_agent.protocol._skills import ParamState, SkillDescription
+from skill_agent.runtime._agent import AgentCore
+from skill_agent.runtime._config import AgentConfig
+from skill_agent.runtime._event_log import EventLog
+from skill_agent.runtime._plugins import SkillRegistry
+from skill_agent.runtime._simulated import SimulatedOutcomes
+from skill_agent.runtime._wiring import bind_devices, bind_hardware
+from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
+from wm_store.ontology import Ontology, core_ontology_path
 
 __all__ = [
     "AgentService",
@@ -158,7 +154,7 @@ class AgentService:
             return _error(AgentInternalError.code, f"{type(e).__name__}: {e}")
 
     async def handle(self, request: AgentRequest) -> AgentReply:
-        """Answer one request; refusals raise the :mod:`skill_agent.errors` class."""
+        """Answer one request; refusals raise the :mod:`skill_agent` class."""
         core = self.core
         match request:
             case ListSkills():
@@ -210,13 +206,13 @@ class RunEventPublisher:
     """Publishes run events on ``agents/<a>/runs/<run>/progress`` and event-log entries on
     ``agents/<a>/events``, in order, in bursts.
 
-    A Zenoh put after the session was idle for a moment costs 100-200 us here (the wake-up of
-    Zenoh's send path); puts back to back cost ~10 us each. So progress events and log entries
-    wait (at most ``max_delay`` seconds) and go out together, and a :class:`RunResult` sends
-    everything pending at once, itself last, in the loop's next turn (after a ``call``'s reply,
-    which carries the same result, has gone out): a short run's seven events cost about one
-    put, and no result waits for ``max_delay``. Measured: a no-op run from another process
-    ~35% faster than with one put per event as it happens (``docs/benchmarks.md``, Skills).
+    A Zenoh put after the session was idle for a moment costs far more than puts back to back
+    (the wake-up of Zenoh's send path; see docs/benchmarks.md, section Skills, "Why the 3x
+    target is not met"). So progress events and log entries wait (at most ``max_delay``
+    seconds) and go out together, and a :class:`RunResult` sends everything pending at once,
+    itself last, in the loop's next turn (after a ``call``'s reply, which carries the same
+    result, has gone out): a short run's seven events cost about one put, and no result waits
+    for ``max_delay``.
     :meth:`publish` and :meth:`record` only queue (they are called inline by the core and its
     event log)."""
 

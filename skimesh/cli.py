@@ -9,13 +9,14 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from device_drivers.errors import DeviceError
+from device_drivers import DeviceError
 from meshlink import MeshlinkError
-from skill_agent.errors import SkillError
-from task_agent.errors import TaskError
-from wm_store.errors import WmError
+from skill_agent import SkillError
+from task_agent import TaskError
+from wm_store import WmError
 
 from .commands import agent, demo, router, sim, task, wm
+from .errors import SkimeshError
 from .runtime import configure_logging
 
 __all__ = ["build_parser", "describe_error", "main"]
@@ -48,6 +49,7 @@ USER_ERRORS: tuple[type[Exception], ...] = (
     SkillError,
     TaskError,
     DeviceError,
+    SkimeshError,
     OSError,
 )
 

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["config_path", "configs_dir"]
+import scenario
+from scenario import Scenario
+
+__all__ = ["config_path", "configs_dir", "known_scenarios", "read_scenario"]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -22,3 +25,14 @@ def config_path(*parts: str) -> Path:
     if not path.exists():
         raise FileNotFoundError(f"no {'/'.join(parts)} in {configs_dir()}")
     return path
+
+
+def known_scenarios() -> list[str]:
+    """The names of the scenarios shipped in ``configs/scenarios``."""
+    return scenario.known_scenarios(configs_dir() / "scenarios")
+
+
+def read_scenario(name_or_path: str) -> Scenario:
+    """A scenario by file, else by the name of a shipped one. Raises ScenarioError (an unknown
+    name: the message lists the known ones)."""
+    return scenario.read_scenario(name_or_path, configs_dir() / "scenarios")

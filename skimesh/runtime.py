@@ -36,11 +36,10 @@ def settle_heap() -> None:
 
     Why: a process that has loaded MuJoCo models, placo solvers and Zenoh sessions holds a
     large heap of start-up objects that live as long as it does, and every full collection
-    scanned all of them: 40-55 ms in the simulator's process, about once per 16 simulated
-    seconds of the meal benchmark, during which the thread that happened to trigger it (the
-    simulation thread as often as not) held the GIL. Frozen, they are never scanned again;
-    objects made later are collected as usual. Nothing is leaked: the frozen objects were
-    reachable anyway.
+    scans all of them, holding the GIL in the thread that happened to trigger it (the
+    simulation thread as often as not; see docs/benchmarks.md, section Simulation, "What made
+    the difference", item 12). Frozen, they are never scanned again; objects made later are
+    collected as usual. Nothing is leaked: the frozen objects were reachable anyway.
     """
     gc.collect()
     gc.freeze()

@@ -21,7 +21,7 @@ from msgspec import Meta, Struct
 
 from wm_store.protocol import Value
 
-from .goals import Goal
+from ._goals import Goal
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -155,7 +155,7 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
 
 class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
     """Plan and run towards ``goal`` (text like ``contain(KitBox-1, Gear-3) and ...``, or a
-    :class:`~task_agent.goals.Goal`)."""
+    :class:`~task_agent.Goal`)."""
 
     goal: str | Goal
     options: TaskOptions = TaskOptions()

@@ -6,7 +6,7 @@ Keys (prefix ``skimesh/<mesh>``): ``tasks/rpc`` answers one
 ``tasks/<task>/events`` carries each task's events (congestion control BLOCK, ``seq`` 1, 2, ...).
 A client that wants every event of its task subscribes first and submits with its own
 ``task_id``. The service follows every agent's event log (``agents/*/events``,
-:class:`~task_agent.run_writes.RunWrites`), so each ``StepFinished`` lists the world-model
+:class:`~task_agent.execution.RunWrites`), so each ``StepFinished`` lists the world-model
 revisions its run wrote.
 
 Requests:
@@ -41,15 +41,13 @@ import anyio
 import msgspec
 from anyio.abc import TaskGroup, TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError
-from meshlink.keys import check_name
+from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError, check_name
 from wm_store import WmClient
 
+from ._errors import RequestError, TaskError, VerificationError
+from ._goals import check_goal, parse_goal
 from .discovery import Discovery
-from .errors import RequestError, TaskError, VerificationError
-from .execution_state import WorldModel
-from .executor import Executor, PlanSource
-from .goals import check_goal, parse_goal
+from .execution import Executor, PlanSource, RunWrites, SkillRunner, WorldModel, ZenohRunner
 from .operator import serve_operator
 from .protocol import (
     AbortTask,
@@ -75,21 +73,19 @@ from .protocol import (
 from .protocol import (
     TaskStatus as TaskStatusRequest,
 )
-from .run_writes import RunWrites
-from .runners import SkillRunner, ZenohRunner
 from .taskfile import load_task_file
-from .verify import verify
+from .verification import verify
 
-__all__ = ["RequestError", "TaskService", "serve_tasks"]
+__all__ = ["TaskService", "serve_tasks"]
 
 _log = logging.getLogger(__name__)
 PlannerFactory = Callable[[TaskOptions], PlanSource]
 
 
 def default_planners() -> PlannerFactory:
-    """One :class:`~task_agent.planner.Planner` per engine and time-out, sharing one limiter
+    """One :class:`~task_agent.planning.Planner` per engine and time-out, sharing one limiter
     (one solve at a time)."""
-    from .planner import Engine, Planner
+    from .planning import Engine, Planner
 
     limiter = anyio.CapacityLimiter(1)
 

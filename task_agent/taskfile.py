@@ -28,16 +28,16 @@ from typing import Any, Literal, NamedTuple
 
 import msgspec
 
-from wm_store.ontology_model import did_you_mean
+from wm_store.ontology import did_you_mean
 from wm_store.protocol import Value
 
-from .errors import VerificationError
+from ._errors import VerificationError
 from .protocol import Call, Parallel, Sequence, TaskBlock, TaskFile
 
 __all__ = [
     "LABEL_PREFIX",
     "REF_PREFIX",
-    "ROOT",
+    "ROOT_PATH",
     "BlockSite",
     "CallSite",
     "Ref",
@@ -51,7 +51,8 @@ __all__ = [
     "where",
 ]
 
-ROOT = "root"
+ROOT_PATH = "root"
+"""The root block's path (and its key in the TOML file)."""
 REF_PREFIX = "@"
 """``@<step id>.<param>``: the value that step ran with (data flow)."""
 LABEL_PREFIX = "label:"
@@ -115,7 +116,7 @@ def _with_ids(block: TaskBlock, path: str) -> TaskBlock:
 
 def assign_ids(task: TaskFile) -> TaskFile:
     """The task with every block that has no id named by its path (idempotent)."""
-    return msgspec.structs.replace(task, root=_with_ids(task.root, ROOT))
+    return msgspec.structs.replace(task, root=_with_ids(task.root, ROOT_PATH))
 
 
 def _blocks(block: TaskBlock, path: str, trail: tuple[Step, ...]) -> Iterator[BlockSite]:
@@ -131,7 +132,7 @@ def _blocks(block: TaskBlock, path: str, trail: tuple[Step, ...]) -> Iterator[Bl
 
 def blocks(task: TaskFile) -> list[BlockSite]:
     """Every block, depth first (a block before its children), with its document order."""
-    return [site._replace(order=i) for i, site in enumerate(_blocks(task.root, ROOT, ()))]
+    return [site._replace(order=i) for i, site in enumerate(_blocks(task.root, ROOT_PATH, ()))]
 
 
 def _relation(a: tuple[Step, ...], b: tuple[Step, ...]) -> tuple[str, int, int]:
@@ -215,8 +216,8 @@ def _located(
     line = next((index[tokens[:n]] for n in range(len(tokens), 0, -1) if tokens[:n] in index), 0)
     indices = [t for t in tokens if isinstance(t, int)]
     block = ""
-    if tokens[:1] == (ROOT,):
-        block = f" (block {'.'.join([ROOT, *map(str, indices)])})"
+    if tokens[:1] == (ROOT_PATH,):
+        block = f" (block {'.'.join([ROOT_PATH, *map(str, indices)])})"
     head = f"{source}:{line}" if line else source
     return VerificationError(f"{head}: {message}{block}")
 
@@ -243,7 +244,7 @@ def _unknown_keys(
 def load_task_file(text: str, *, source: str = "<text>") -> TaskFile:
     """The task in ``text`` (TOML), every block with an id (:func:`assign_ids`).
 
-    Raises :class:`~task_agent.errors.VerificationError` naming ``source``, the line when it
+    Raises :class:`~task_agent.VerificationError` naming ``source``, the line when it
     can be found, msgspec's path and the block for a malformed file."""
     try:
         raw = tomllib.loads(text)
@@ -256,12 +257,12 @@ def load_task_file(text: str, *, source: str = "<text>") -> TaskFile:
         tokens = _tokens(found.group(1)) if found else ()
         if not found and (field := re.search(r"unknown field `([^`]+)`", message)):
             tokens = (field.group(1),)
-            hint = did_you_mean(field.group(1), ("name", ROOT))
+            hint = did_you_mean(field.group(1), ("name", ROOT_PATH))
             message = f"unknown top-level field `{field.group(1)}`{hint} A task file has {_TOP}"
         elif tokens[-1:] == ("block",) and message.startswith("Invalid value"):
             message += "; a block is 'call', 'sequence' or 'parallel'"
         raise _located(message, tokens, text, source) from None
-    for message, tokens in _unknown_keys(raw.get(ROOT), (ROOT,)):
+    for message, tokens in _unknown_keys(raw.get(ROOT_PATH), (ROOT_PATH,)):
         raise _located(message, tokens, text, source)
     return assign_ids(task)
 

@@ -1,69 +1,95 @@
 """skimesh world model: an ontology-typed scene graph served as a revisioned, durable Zenoh
 key-value store that publishes every change, and an async client that keeps a local replica.
 
-Layers inside the package (pure core first, adapters last)::
+This face is the client's API and the package's errors::
 
-    protocol, errors           wire schema and error tree
-    ontology*, vocab           the OWL ontology loaded with rdflib, name constants
-    state, transactions,       scene graph + indexes, validated all-or-nothing transactions,
-    query, resolution          resolve/relations, multi-source property resolution
-    rdf, sparql, reasoners     Turtle import/export, read-only SPARQL, spatial/similarity reasoners
-    wal, snapshots, durability write-ahead log, snapshots, group commit
-    store, service             the authoritative store, request -> reply dispatch
-    replica, client, transport the client: local replica, typed API, in-memory/Zenoh transports
-    server, presence           the Zenoh adapter of ``skimesh wm`` and agent presence
+    async with WmClient.connect(ZenohTransport(mesh)) as wm:
+        box = await wm.add_element(Cls.KitBox, label="kit-1")
+
+- :class:`WmClient` (local reads from its :class:`Replica`, writes to the store), the
+  transports :class:`WmTransport`, :class:`InMemoryTransport` and :class:`ZenohTransport`,
+  and robot registration (:class:`RobotRegistration`, :class:`DeviceSpec`, :class:`SkillSpec`);
+- every exception: all derive from :class:`WmError`, each with a stable wire ``code``.
+
+The concepts, each a sub-package whose face is the public path of its names (pure core first,
+adapters last)::
+
+    protocol     wire schema: values, elements, ops, requests, replies, changes, codec
+    ontology     the OWL ontology loaded with rdflib, name constants (Cls, Rel, Prop, Tpl)
+    scene        scene graph + indexes, queries, validated all-or-nothing transactions
+    rdf          Turtle import/export, read-only SPARQL
+    reasoners    spatial and similarity reasoners, plug-in loading
+    durability   write-ahead log, snapshots, group commit
+    server       the authoritative store, request -> reply dispatch, its Zenoh serving
+
+Only the adapters import ``meshlink``: ``_zenoh_transport`` (:class:`ZenohTransport`) and
+``server/_zenoh``, ``server/_presence`` (:func:`~wm_store.server.serve_store`, agent presence).
 """
 
-from .client import WmClient as WmClient
-from .errors import CardinalityError as CardinalityError
-from .errors import ConflictError as ConflictError
-from .errors import ElementNotFoundError as ElementNotFoundError
-from .errors import OntologyError as OntologyError
-from .errors import RevisionTimeoutError as RevisionTimeoutError
-from .errors import TransportError as TransportError
-from .errors import ValidationError as ValidationError
-from .errors import WmError as WmError
-from .ontology import Ontology as Ontology
-from .protocol import Element as Element
-from .protocol import PropertyFilter as PropertyFilter
-from .protocol import Query as Query
-from .protocol import Relation as Relation
-from .rdf import export_turtle as export_turtle
-from .rdf import import_turtle as import_turtle
-from .registration import DeviceSpec as DeviceSpec
-from .registration import RobotRegistration as RobotRegistration
-from .registration import SkillSpec as SkillSpec
-from .server import serve_store as serve_store
-from .service import WmService as WmService
-from .store import StoreConfig as StoreConfig
-from .store import WmStore as WmStore
-from .transport import InMemoryTransport as InMemoryTransport
-from .transport import ZenohTransport as ZenohTransport
+from ._client import WmClient as WmClient
+from ._errors import CardinalityError as CardinalityError
+from ._errors import ConflictError as ConflictError
+from ._errors import CorruptLogError as CorruptLogError
+from ._errors import DuplicateIdError as DuplicateIdError
+from ._errors import ElementNotFoundError as ElementNotFoundError
+from ._errors import HistoryCompactedError as HistoryCompactedError
+from ._errors import OntologyError as OntologyError
+from ._errors import PropertyValueError as PropertyValueError
+from ._errors import ProtocolError as ProtocolError
+from ._errors import RelationDomainError as RelationDomainError
+from ._errors import RemoteError as RemoteError
+from ._errors import RevisionTimeoutError as RevisionTimeoutError
+from ._errors import StorageError as StorageError
+from ._errors import TransportError as TransportError
+from ._errors import TreeShapeError as TreeShapeError
+from ._errors import UnknownClassError as UnknownClassError
+from ._errors import UnknownPropertyError as UnknownPropertyError
+from ._errors import UnknownRelationError as UnknownRelationError
+from ._errors import UnknownTemplateError as UnknownTemplateError
+from ._errors import ValidationError as ValidationError
+from ._errors import WmError as WmError
+from ._registration import DeviceSpec as DeviceSpec
+from ._registration import RobotRegistration as RobotRegistration
+from ._registration import SkillSpec as SkillSpec
+from ._registration import registration_ops as registration_ops
+from ._registration import unregistration_ops as unregistration_ops
+from ._replica import Replica as Replica
+from ._replica import ReplicaStats as ReplicaStats
+from ._transport import InMemoryTransport as InMemoryTransport
+from ._transport import WmTransport as WmTransport
+from ._zenoh_transport import ZenohTransport as ZenohTransport
 
 __all__ = [
     "CardinalityError",
     "ConflictError",
+    "CorruptLogError",
     "DeviceSpec",
-    "Element",
+    "DuplicateIdError",
     "ElementNotFoundError",
+    "HistoryCompactedError",
     "InMemoryTransport",
-    "Ontology",
     "OntologyError",
-    "PropertyFilter",
-    "Query",
-    "Relation",
+    "PropertyValueError",
+    "ProtocolError",
+    "RelationDomainError",
+    "RemoteError",
+    "Replica",
+    "ReplicaStats",
     "RevisionTimeoutError",
     "RobotRegistration",
     "SkillSpec",
-    "StoreConfig",
+    "StorageError",
     "TransportError",
+    "TreeShapeError",
+    "UnknownClassError",
+    "UnknownPropertyError",
+    "UnknownRelationError",
+    "UnknownTemplateError",
     "ValidationError",
     "WmClient",
     "WmError",
-    "WmService",
-    "WmStore",
+    "WmTransport",
     "ZenohTransport",
-    "export_turtle",
-    "import_turtle",
-    "serve_store",
+    "registration_ops",
+    "unregistration_ops",
 ]

@@ -1,10 +1,10 @@
 """The smallest skill: no parameters, no conditions, nothing to do. Used to measure the cost of
-a run itself (``benchmarks/skills.py``) and to check that an agent answers."""
+a run itself (``benchmarks/skills/``) and to check that an agent answers."""
 
 from __future__ import annotations
 
+from skill_agent import Skill, SkillContext
 from skill_agent.protocol import SkillDescription
-from skill_agent.skill import Skill, SkillContext
 
 
 class NoOp(Skill):

@@ -1,4 +1,4 @@
-"""A partner's service driven by a skill through skill_agent.adapter: the service side of the
+"""A partner's service driven by a skill through skill_agent.external: the service side of the
 goal / feedback / cancel protocol, as a foreign program would write it.
 
 Run it with ``python docs/examples/partner_service.py --connect tcp/127.0.0.1:7447``; the agent
@@ -12,7 +12,7 @@ import argparse
 import anyio
 
 from meshlink import Answer, IncomingQuery, Mesh, MeshConfig, open_mesh
-from skill_agent.adapter import (
+from skill_agent.external import (
     CancelAck,
     Feedback,
     GoalAccepted,

@@ -12,13 +12,13 @@ from typing import cast
 
 import anyio
 
+from skill_agent import Skill, SkillContext
 from skill_agent.protocol import (
     EmptyCond,
     ParamSpec,
     RelationCond,
     SkillDescription,
 )
-from skill_agent.skill import Skill, SkillContext
 from wm_store import WmClient
 
 OPEN_WIDTH = 0.08

@@ -15,10 +15,12 @@ from pathlib import Path
 import anyio
 import pytest
 
-from skill_agent import AgentCore, SimulatedOutcomes, SkillRegistry, StartRun
-from skill_agent.protocol import WmWriteEntry
-from wm_store import InMemoryTransport, Ontology, Relation, WmClient, WmService, WmStore
-from wm_store.protocol import UpdateElement
+from skill_agent.protocol import StartRun, WmWriteEntry
+from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillRegistry
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
+from wm_store.protocol import Relation, UpdateElement
+from wm_store.server import WmService, WmStore
 
 HERE = Path(__file__).resolve().parent
 

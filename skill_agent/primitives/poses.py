@@ -1,12 +1,12 @@
 """Pose maths the primitives share (pure, quick, no I/O).
 
 Frames and units: every pose here is in the **world** frame, positions in metres, quaternions
-``(x, y, z, w)`` (the order of :class:`~device_drivers.interfaces.WorldPose` and of the world
+``(x, y, z, w)`` (the order of :class:`~device_drivers.WorldPose` and of the world
 model's :class:`~wm_store.protocol.Orientation`). The tool centre point (tcp) frame of a
 gripper has its z axis along the approach direction and its y axis along the finger closing
-axis (``device_drivers.robot_spec.RobotLayout.tcp_site``).
+axis (``scenario.RobotLayout.tcp_site``).
 
-Rigid transforms are :class:`wm_store.reasoners.spatial.Transform` (rotate, then translate),
+Rigid transforms are :class:`wm_store.reasoners.Transform` (rotate, then translate),
 so the skill layer and the world model's spatial reasoner compose poses the same way.
 """
 
@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 
-from device_drivers.interfaces import WorldPose
+from device_drivers import WorldPose
 from wm_store.protocol import Orientation, Pose, Position
-from wm_store.reasoners.spatial import Transform, quat_multiply, quat_rotate
+from wm_store.reasoners import Transform, quat_multiply, quat_rotate
 
 __all__ = [
     "Quat",

@@ -2,9 +2,9 @@
 put_in, door skills for an arm and for a smart appliance, drawer skills for an arm, heat,
 operate (an appliance's buttons).
 
-Each skill is a :class:`~skill_agent.skill.Skill` subclass with a full description (parameters
+Each skill is a :class:`~skill_agent.Skill` subclass with a full description (parameters
 typed by ontology classes, pre / hold / post conditions in the SkiROS style), sensing in
-``pre_sense`` / ``post_sense`` and honest failures (:class:`~skill_agent.errors.SkillFailure`
+``pre_sense`` / ``post_sense`` and honest failures (:class:`~skill_agent.SkillFailure`
 when the hardware or the sensors contradict the prediction). Motions go through
 :mod:`skill_agent.primitives`.
 
@@ -32,25 +32,25 @@ Every pre- and post-condition has a symbolic face for the planner except those l
 :data:`RUNTIME_ONLY` (checked when the skill runs only).
 """
 
-from .appliance import HEATED as HEATED
-from .appliance import ApplianceCloseDoor as ApplianceCloseDoor
-from .appliance import ApplianceOpenDoor as ApplianceOpenDoor
-from .appliance import Heat as Heat
-from .doors import ArmCloseDoor as ArmCloseDoor
-from .doors import ArmOpenDoor as ArmOpenDoor
-from .drawers import ArmCloseDrawer as ArmCloseDrawer
-from .drawers import ArmOpenDrawer as ArmOpenDrawer
-from .locate import Locate as Locate
-from .locate import locate_object as locate_object
-from .navigate import Navigate as Navigate
-from .operate import Operate as Operate
-from .operate import OperateStop as OperateStop
-from .pick import Pick as Pick
-from .pick import TakeOut as TakeOut
-from .place import Place as Place
-from .place import PlaceOn as PlaceOn
-from .serve import PutIn as PutIn
-from .serve import Serve as Serve
+from skill_agent.skills._appliance import HEATED as HEATED
+from skill_agent.skills._appliance import ApplianceCloseDoor as ApplianceCloseDoor
+from skill_agent.skills._appliance import ApplianceOpenDoor as ApplianceOpenDoor
+from skill_agent.skills._appliance import Heat as Heat
+from skill_agent.skills._doors import ArmCloseDoor as ArmCloseDoor
+from skill_agent.skills._doors import ArmOpenDoor as ArmOpenDoor
+from skill_agent.skills._drawers import ArmCloseDrawer as ArmCloseDrawer
+from skill_agent.skills._drawers import ArmOpenDrawer as ArmOpenDrawer
+from skill_agent.skills._locate import Locate as Locate
+from skill_agent.skills._locate import locate_object as locate_object
+from skill_agent.skills._navigate import Navigate as Navigate
+from skill_agent.skills._operate import Operate as Operate
+from skill_agent.skills._operate import OperateStop as OperateStop
+from skill_agent.skills._pick import Pick as Pick
+from skill_agent.skills._pick import TakeOut as TakeOut
+from skill_agent.skills._place import Place as Place
+from skill_agent.skills._place import PlaceOn as PlaceOn
+from skill_agent.skills._serve import PutIn as PutIn
+from skill_agent.skills._serve import Serve as Serve
 
 __all__ = [
     "ALL_SKILLS",

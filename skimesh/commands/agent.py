@@ -22,17 +22,17 @@ import anyio
 import msgspec
 
 from meshlink import Mesh, MeshlinkError, add_mesh_arguments
+from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.config import AgentConfig, load_config
-from skill_agent.errors import AgentTransportError, SkillError
 from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
+from skill_agent.runtime import AgentConfig, load_config
 from skill_agent.server import run_agent
 from wm_store import WmClient, WmError, ZenohTransport
-from wm_store.ontology_model import TYPED_KINDS
+from wm_store.ontology import TYPED_KINDS
 from wm_store.protocol import Value
 
-from ..connect import mesh_session
 from ..runtime import run_service
+from ._connect import mesh_session
 
 __all__ = ["add_parser", "parse_params", "scenario_config_path"]
 
@@ -118,8 +118,8 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
 
 
 def _zenoh_config_file(path: str) -> str:
-    """``--config`` is the Zenoh JSON5 file, as for every command; an agent TOML there (it
-    used to be the agent's flag) is a usage error naming ``--agent-config``."""
+    """``--config`` is the Zenoh JSON5 file, as for every command; an agent TOML there
+    (the agent's own file) is a usage error naming ``--agent-config``."""
     if path.lower().endswith(".toml"):
         raise argparse.ArgumentTypeError(
             f"{path} is TOML, but --config takes a Zenoh JSON5 file; give the agent's config "
@@ -141,8 +141,7 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
     """The agent config the scenario file names for ``robot`` (a robot name, an appliance
     label, or the name inside one of its agent configs: ``Scenario.agents``), or
     FileNotFoundError listing what the scenario has."""
-    from device_drivers.errors import ScenarioError
-    from device_drivers.scenario_load import load_scenario
+    from scenario import ScenarioError, load_scenario
 
     from .sim import scenario_file
 
@@ -201,7 +200,7 @@ def _serve(args: argparse.Namespace) -> int:
 
 async def _remote_drivers(mesh: Mesh, config: AgentConfig, timeout: float) -> dict[str, object]:
     """Zenoh proxies of the devices served on the mesh, by label (those this agent uses)."""
-    from device_drivers.remote_client import connect_devices
+    from device_drivers.remote import connect_devices
 
     found = {d.name: d for d in (await connect_devices(mesh, timeout=timeout)).values()}
     mine: dict[str, object] = {

@@ -3,9 +3,9 @@
 In one process, on loopback only: a Zenoh router, the durable world model (a temporary data
 directory, or ``--data DIR``) loaded with the scenario's scene, the MuJoCo world, one skill
 agent per robot (and the microwave's own agent for ``meal``) driving the world's devices
-in-process, and the task agent (:mod:`skimesh.demo_stack`). Then the scenario's goal (or
+in-process, and the task agent (:mod:`skimesh.demo`). Then the scenario's goal (or
 ``--goal``) goes to the task agent; the terminal shows the plan and every step of every robot
-(:mod:`skimesh.demo_output`); at the end each goal fact is checked in the world model *and* in
+(:mod:`skimesh.demo`); at the end each goal fact is checked in the world model *and* in
 the physics, and a summary says what happened and where the recording is.
 
 Exit codes: 0 the task succeeded and the goal holds in the world model and in the physics;
@@ -33,10 +33,10 @@ from typing import TYPE_CHECKING, Any
 import anyio
 
 if TYPE_CHECKING:
-    from device_drivers.recorder import Recorder
-    from device_drivers.scenario import Scenario
+    from mujoco_sim.recording import Recorder
+    from scenario import Scenario
 
-    from ..demo_run import DemoSetup
+    from ..demo import DemoSetup
 
 __all__ = ["add_parser", "mission_goal"]
 
@@ -93,12 +93,12 @@ def mission_goal(scenario: Scenario) -> str:
 
 def _recorder(args: argparse.Namespace, rrd: Path, robots: list[str]) -> Recorder:
     """The world's recorder, writing ``rrd`` (and streaming / serving when asked), with the
-    viewer layout of :mod:`skimesh.blueprint` (the scene, task events, each robot's progress)."""
+    viewer layout of :mod:`skimesh.recording` (the scene, task events, each robot's progress)."""
     import rerun as rr
 
-    from device_drivers.recorder import Recorder
+    from mujoco_sim.recording import Recorder
 
-    from ..blueprint import blueprint
+    from ..recording import blueprint
 
     recorder = Recorder(application="skimesh-demo")
     sinks: list[Any] = [rr.FileSink(str(rrd))]
@@ -121,10 +121,9 @@ def _quiet_services(verbosity: int) -> None:
 
 def _setup(args: argparse.Namespace, data: Path) -> DemoSetup:
     """Read the scenario and the agents' configurations (files: before the loop runs)."""
-    from device_drivers.scenario_load import load_scenario
+    from scenario import load_scenario
 
-    from ..demo_run import DemoSetup
-    from ..demo_stack import agent_configs
+    from ..demo import DemoSetup, agent_configs
     from .sim import scenario_file
 
     scenario = load_scenario(scenario_file(args.scenario))
@@ -147,10 +146,10 @@ def _setup(args: argparse.Namespace, data: Path) -> DemoSetup:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from device_drivers.errors import ScenarioError
-    from skill_agent.errors import SkillError
+    from scenario import ScenarioError
+    from skill_agent import SkillError
 
-    from ..demo_stack import DemoError
+    from ..errors import DemoError
 
     _quiet_services(args.verbose)
     with tempfile.TemporaryDirectory(prefix="skimesh-demo-") as tmp:
@@ -165,7 +164,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 async def _main(args: argparse.Namespace, setup: DemoSetup, recorder: Recorder) -> int:
-    from ..demo_run import run_demo
+    from ..demo import run_demo
 
     stop = anyio.Event()
     code = EXIT_SETUP

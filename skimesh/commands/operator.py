@@ -28,15 +28,12 @@ from contextlib import asynccontextmanager
 import anyio
 import msgspec
 
-from meshlink import Mesh, MeshlinkError, add_mesh_arguments
-from meshlink.messages import Sample
-from meshlink.subscription import Subscription
-from task_agent.client import OperatorClient
-from task_agent.errors import TaskError
+from meshlink import Mesh, MeshlinkError, Sample, Subscription, add_mesh_arguments
+from task_agent import OperatorClient, TaskError
 from task_agent.protocol import PendingStep, SeenAt
 
-from ..connect import mesh_session
 from ..runtime import run_service
+from ._connect import mesh_session
 
 __all__ = ["add_parser"]
 

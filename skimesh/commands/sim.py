@@ -65,11 +65,10 @@ def _run(args: argparse.Namespace) -> int:
     if args.images:  # before mujoco is imported: headless OpenGL through EGL
         os.environ.setdefault("MUJOCO_GL", "egl")
         os.environ.setdefault("EGL_PLATFORM", "surfaceless")
-    from device_drivers.drivers import sim_devices
-    from device_drivers.recorder import Recorder
     from device_drivers.remote import serve_devices
-    from device_drivers.scenario_load import load_scenario
-    from device_drivers.world import SimWorld, WorldOptions
+    from mujoco_sim import SimWorld, WorldOptions, sim_devices
+    from mujoco_sim.recording import Recorder
+    from scenario import load_scenario
 
     scenario = load_scenario(scenario_file(args.scenario))
     options = WorldOptions(fast=args.fast, grasp=args.grasp, seed=args.seed)
@@ -84,7 +83,7 @@ def _run(args: argparse.Namespace) -> int:
             async with open_mesh(mesh_config_from_args(args)) as mesh:
                 world = await SimWorld.create(scenario, options, recorder)
                 devices = sim_devices(world)
-                settle_heap()  # no stall of ~50 ms for a full collection every few seconds
+                settle_heap()  # no full collections of the start-up heap (docs/benchmarks.md)
                 async with anyio.create_task_group() as tg:
                     await tg.start(world.run)
                     serve = partial(serve_devices, state_rate=args.state_rate)

@@ -27,8 +27,7 @@ import anyio
 import msgspec
 
 from meshlink import MeshlinkError, add_mesh_arguments
-from task_agent.client import TaskClient, new_task_id
-from task_agent.errors import TaskError, VerificationError
+from task_agent import TaskClient, TaskError, VerificationError, new_task_id
 from task_agent.protocol import (
     StepProgress,
     TaskEvent,
@@ -37,11 +36,11 @@ from task_agent.protocol import (
 )
 from wm_store import WmClient, WmError, ZenohTransport
 
-from ..connect import mesh_session, wm_session
 from ..runtime import run_service
+from . import _plan as plan_command
 from . import operator as operator_command
-from . import plan as plan_command
-from .task_output import ProgressPrinter, info_lines, print_json, print_problems
+from ._connect import mesh_session, wm_session
+from ._task_output import ProgressPrinter, info_lines, print_json, print_problems
 
 __all__ = ["EXIT_CODES", "add_parser"]
 
@@ -249,7 +248,7 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    from task_agent.service import serve_tasks  # the planner (~1.5 s): only for the service
+    from task_agent.service import serve_tasks  # slow to import (docs/benchmarks.md, Planning)
 
     async def main() -> int:
         try:

@@ -2,7 +2,7 @@
 
 ``skimesh wm --data DIR`` serves the store (``--scenario S``: with S's initial scene, loaded
 once). With a sub-command (``ls``, ``get``, ``tree``, ``query``, ``sparql``, ``check``,
-``export``, ``import``, ``import-scenario``, ``info``; in :mod:`.wm_client`) it is a client of
+``export``, ``import``, ``import-scenario``, ``info``; in :mod:`._wm_client`) it is a client of
 a running store.
 """
 
@@ -16,15 +16,16 @@ from typing import TYPE_CHECKING
 import anyio
 
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
-from wm_store import Ontology, StoreConfig, WmStore, import_turtle, serve_store
-from wm_store.ontology import core_ontology_path
+from wm_store.ontology import Ontology, core_ontology_path
 from wm_store.protocol import Transact
+from wm_store.rdf import import_turtle
+from wm_store.server import StoreConfig, WmStore, serve_store
 
 from ..runtime import run_service
-from .wm_client import add_client_commands
+from ._wm_client import add_client_commands
 
 if TYPE_CHECKING:
-    from device_drivers.scenario import Scenario
+    from scenario import Scenario
 
 __all__ = ["add_parser", "load_ontology"]
 
@@ -105,14 +106,14 @@ def _serve(args: argparse.Namespace) -> int:
 
 
 def _read_scenario(name: str) -> Scenario:
-    from ..scenario_scene import read_scenario
+    from skimesh.paths import read_scenario
 
     return read_scenario(name)
 
 
 async def _load_scenario(store: WmStore, scenario: Scenario) -> None:
     """``--scenario``: load the scenario's scene into the store, unless it is there already."""
-    from ..scenario_scene import scene_loaded, scene_ops
+    from scenario.wm import scene_loaded, scene_ops
 
     ops = scene_ops(scenario, store.state, store.ontology)
     if not ops:

@@ -21,19 +21,17 @@ from contextlib import asynccontextmanager
 import anyio
 import msgspec
 
-from skill_agent.core import AgentCore, SkillEntry
-from skill_agent.simulated import SimulatedOutcomes
-from skill_agent.skill import Skill
+from skill_agent import Skill
+from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillEntry
 from skill_agent.skills import Navigate, Pick, Place, Serve
 from task_agent.discovery import Discovery
-from task_agent.executor import Executor
-from task_agent.planner import Planner
+from task_agent.execution import CoreRunner, Executor
+from task_agent.planning import Planner
 from task_agent.protocol import TaskEvent, TaskOptions
-from task_agent.runners import CoreRunner
-from wm_store import InMemoryTransport, WmClient, WmService, WmStore
+from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, SkillSpec, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Pose, Position, Relation, SetRelation, Value
-from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec
+from wm_store.server import WmService, WmStore
 
 __all__ = ["SKILLS", "Fleet", "fleet"]
 

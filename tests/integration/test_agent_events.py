@@ -26,10 +26,8 @@ import rerun as rr
 import rerun.chunk
 
 from meshlink import Mesh, MeshConfig, open_mesh
-from skill_agent.client import AgentClient
-from skill_agent.errors import UnknownSkillError
-from skill_agent.event_feed import EventFeed
-from skill_agent.events import EventLog
+from skill_agent import UnknownSkillError
+from skill_agent.client import AgentClient, EventFeed
 from skill_agent.protocol import (
     LogEntry,
     ProgressEntry,
@@ -40,9 +38,9 @@ from skill_agent.protocol import (
     WmWriteEntry,
     encode,
 )
-from skimesh.recording import step_text
-from skimesh.recording_agents import AgentEventLines, record_agent_events
-from task_agent.client import TaskClient
+from skill_agent.runtime import EventLog
+from skimesh.recording import AgentEventLines, record_agent_events, step_text
+from task_agent import TaskClient
 from task_agent.protocol import StepFinished, StepStarted, TaskEvent
 from task_agent.service import serve_tasks
 from wm_store import WmClient, ZenohTransport
@@ -54,7 +52,7 @@ pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.anyio]
 
 MARK = """
 from skill_agent.protocol import ParamSpec, SkillDescription
-from skill_agent.skill import Skill
+from skill_agent import Skill
 from wm_store.protocol import AddElement
 
 
@@ -184,7 +182,7 @@ async def test_payloads_that_are_no_entry_are_skipped_and_logged(
 ) -> None:
     good = RefusedEntry(agent="ghost", skill="s", code="unknown_skill", message="m", stamp=1.0)
     other = RefusedEntry(agent="other", skill="s", code="unknown_skill", message="m", stamp=2.0)
-    caplog.set_level(logging.WARNING, logger="skill_agent.event_feed")
+    caplog.set_level(logging.WARNING, logger="skill_agent.client")
     async with site.session() as listener, site.session() as talker:
         key = talker.keys.agent_events("ghost")
         async with EventFeed.open(listener, "ghost") as ghost, EventFeed.open(listener) as every:
@@ -198,7 +196,7 @@ async def test_payloads_that_are_no_entry_are_skipped_and_logged(
                 assert await ghost.receive() == good, "one agent's feed: its own entries"
                 assert [await every.receive(), await every.receive()] == [other, good]
     assert ghost.skipped == every.skipped == 3
-    warned = [r.getMessage() for r in caplog.records if r.name == "skill_agent.event_feed"]
+    warned = [r.getMessage() for r in caplog.records if r.name == "skill_agent.client"]
     assert len(warned) == 6 and all(key in line for line in warned)
     assert sum("undecodable" in line for line in warned) == 4
 

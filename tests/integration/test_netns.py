@@ -35,7 +35,7 @@ pytestmark = [pytest.mark.netns, pytest.mark.slow, pytest.mark.zenoh, pytest.mar
 CONFIGS = ROOT / "configs" / "zenoh"
 LEASE_MS = 2000
 PORT = 7447
-SERVE = '"skill_agent.skills.place:Place",\n    "skill_agent.skills.serve:Serve",'
+SERVE = '"skill_agent.skills:Place",\n    "skill_agent.skills:Serve",'
 SIMULATION = """
 [simulation]
 probabilities = { navigate = 1.0, locate = 1.0, pick = 1.0, place = 1.0, serve = 1.0 }
@@ -49,10 +49,10 @@ PROBE = '''
 """In-namespace probe: a world-model client driven by JSON lines on stdin."""
 import hashlib, json, sys, time
 import anyio, msgspec
-from device_drivers.scenario_load import load_scenario
+from scenario import load_scenario
 from meshlink import MeshConfig, open_mesh
 from skill_agent.client import list_agents
-from skill_agent.scenario_wm import scenario_ops
+from scenario.wm import scenario_ops
 from wm_store import WmClient, ZenohTransport
 from wm_store.protocol import AddElement, Relation
 
@@ -139,7 +139,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
     (folder / "probe.py").write_text(PROBE)
     for robot in ("r1", "r2"):
         text = (ROOT / "configs" / "agents" / "kitting" / f"{robot}.toml").read_text()
-        place = '"skill_agent.skills.place:Place",'
+        place = '"skill_agent.skills:Place",'
         assert place in text, f"the kitting agent {robot} no longer has {place}"
         text = text.split("[simulation]")[0].replace(place, SERVE)
         (folder / f"{robot}.toml").write_text(text + SIMULATION)

@@ -34,9 +34,9 @@ import pyarrow as pa  # type: ignore[import-untyped]  # rerun's own dependency
 import pytest
 import rerun.chunk
 
-from device_drivers.scenario_load import load_scenario
-from device_drivers.scene_facts import SceneFacts, Snapshot, object_in
-from device_drivers.scene_model import build_scene
+from mujoco_sim import SceneFacts, Snapshot, object_in
+from mujoco_sim.models import build_scene
+from scenario import load_scenario
 
 from .netns import Lab, unavailable
 from .netns_site import Site
@@ -71,7 +71,7 @@ GRIPPERS = '''
 """In-namespace: what each robot's gripper holds, from the simulated devices over Zenoh."""
 import json, sys
 import anyio
-from device_drivers.remote_client import connect_devices
+from device_drivers.remote import connect_devices
 from meshlink import MeshConfig, open_mesh
 
 

@@ -14,17 +14,26 @@ from typing import Any
 import anyio
 import pytest
 
-from device_drivers.drivers import SimArm, SimBase, SimGripper, sim_devices
-from device_drivers.interfaces import WorldPose
-from device_drivers.motion_math import tool_down
-from device_drivers.robot_spec import Pose2D
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import SimWorld, WorldOptions, running_world
-from skill_agent.primitives import (
+from device_drivers import (
     CollisionError,
     GraspLostError,
     MotionTimeoutError,
+    Pose2D,
     UnreachableError,
+    WorldPose,
+)
+from mujoco_sim import (
+    SimArm,
+    SimBase,
+    SimGripper,
+    SimWorld,
+    WorldOptions,
+    running_world,
+    sim_devices,
+)
+from mujoco_sim.motion import tool_down
+from scenario import load_scenario
+from skill_agent.primitives import (
     approach,
     close_gripper,
     drive,
@@ -40,7 +49,7 @@ from skill_agent.primitives import (
 )
 from skill_agent.primitives.poses import axis, translated
 from wm_store.protocol import SizeCylinder
-from wm_store.reasoners.spatial import Transform
+from wm_store.reasoners import Transform
 
 from .test_sim_remote import KITTING, READY
 from .test_skills_sim import arm_speed

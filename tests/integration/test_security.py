@@ -37,8 +37,8 @@ import pytest
 
 from meshlink import Answer, IncomingQuery, Mesh, MeshConfig, NoReplyError, SessionError, open_mesh
 from meshlink.testing import free_port
+from skill_agent import AgentTransportError
 from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.errors import AgentTransportError
 from wm_store import TransportError, WmClient, ZenohTransport
 from wm_store.protocol import AddElement, Transact, encode
 

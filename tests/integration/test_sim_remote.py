@@ -18,22 +18,24 @@ import anyio
 import msgspec
 import pytest
 
-from device_drivers import protocol as p
-from device_drivers.drivers import sim_devices
-from device_drivers.errors import (
+from device_drivers import (
+    Arm,
     CommandError,
+    Device,
     DeviceBusyError,
+    Gripper,
+    MobileBase,
     MotionStoppedError,
+    ObjectSensor,
+    Pose2D,
     UnreachableError,
 )
-from device_drivers.interfaces import Arm, Device, Gripper, MobileBase, ObjectSensor
-from device_drivers.motion_math import tool_down
-from device_drivers.remote import serve_devices
-from device_drivers.remote_client import RemoteArm, connect_devices
-from device_drivers.robot_spec import Pose2D
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import SimWorld, WorldOptions, running_world
+from device_drivers import protocol as p
+from device_drivers.remote import RemoteArm, connect_devices, serve_devices
 from meshlink import Mesh, open_mesh
+from mujoco_sim import SimWorld, WorldOptions, running_world, sim_devices
+from mujoco_sim.motion import tool_down
+from scenario import load_scenario
 from tests.conftest import MeshConfigFactory
 
 from .procs import ROOT, Child

@@ -31,8 +31,8 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from meshlink import Mesh, MeshConfig, open_mesh
+from skill_agent import AgentTransportError, ResourceBusyError
 from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.errors import AgentTransportError, ResourceBusyError
 from skill_agent.protocol import (
     ErrorReply,
     ListSkills,
@@ -58,7 +58,7 @@ EXAMPLES = ROOT / "docs" / "examples"
 PROBE = """
 import anyio
 from skill_agent.protocol import ParamSpec, SkillDescription
-from skill_agent.skill import Skill
+from skill_agent import Skill
 
 
 class Probe(Skill):

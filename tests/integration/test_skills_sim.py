@@ -17,16 +17,13 @@ import anyio
 import numpy as np
 import pytest
 
-from device_drivers.drivers import sim_devices
-from device_drivers.interfaces import Appliance
-from device_drivers.scenario import Scenario
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import SimWorld, WorldOptions, running_world
-from skill_agent.core import AgentCore, SkillEntry
-from skill_agent.errors import PreconditionError
+from device_drivers import Appliance
+from mujoco_sim import SimWorld, WorldOptions, running_world, sim_devices
+from scenario import Scenario, load_scenario
+from scenario.wm import scenario_ops
+from skill_agent import PreconditionError, Skill
 from skill_agent.protocol import Progress, RunEvent, RunResult, StartRun
-from skill_agent.scenario_wm import scenario_ops
-from skill_agent.skill import Skill
+from skill_agent.runtime import AgentCore, SkillEntry
 from skill_agent.skills import (
     ApplianceCloseDoor,
     ApplianceOpenDoor,
@@ -37,13 +34,14 @@ from skill_agent.skills import (
     OperateStop,
     Pick,
     Place,
+    PlaceOn,
     Serve,
 )
-from skill_agent.skills.place import PlaceOn
 from tests.conftest import SlowSteps
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology, Prop, Rel
 from wm_store.protocol import Pose
-from wm_store.vocab import Prop, Rel
+from wm_store.server import WmService, WmStore
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

@@ -28,11 +28,10 @@ import pytest
 
 from meshlink import Mesh, MeshConfig, open_mesh
 from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.config import load_config
 from skill_agent.protocol import RunResult
-from task_agent.client import TaskClient
-from task_agent.discovery import Discovery
-from task_agent.discovery_model import AgentInfo
+from skill_agent.runtime import load_config
+from task_agent import TaskClient
+from task_agent.discovery import AgentInfo, Discovery
 from task_agent.protocol import StepStarted, TaskEvent
 from wm_store import WmClient, ZenohTransport
 from wm_store.protocol import (

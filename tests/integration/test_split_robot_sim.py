@@ -15,19 +15,16 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.drivers import sim_devices
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import SimWorld, WorldOptions, running_world
-from skill_agent.config import load_config
-from skill_agent.core import AgentCore
-from skill_agent.plugins import SkillRegistry
+from mujoco_sim import SimWorld, WorldOptions, running_world, sim_devices
+from scenario import load_scenario
+from scenario.wm import scenario_ops
 from skill_agent.protocol import RunResult, StartRun
-from skill_agent.scenario_wm import scenario_ops
+from skill_agent.runtime import AgentCore, SkillRegistry, bind_devices, bind_hardware, load_config
 from skill_agent.server import agent_registration
-from skill_agent.wiring import bind_devices, bind_hardware
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology, Rel
 from wm_store.protocol import Value
-from wm_store.vocab import Rel
+from wm_store.server import WmService, WmStore
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

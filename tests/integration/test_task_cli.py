@@ -17,7 +17,7 @@ import anyio
 import pytest
 
 from skill_agent.client import AgentClient
-from task_agent.client import new_task_id
+from task_agent import new_task_id
 
 from .procs import Child
 from .test_tasks import Site, add_robots, running_site

@@ -33,7 +33,7 @@ import pytest
 
 from meshlink import Mesh, MeshConfig, open_mesh
 from skill_agent.client import AgentClient
-from task_agent.client import TaskClient, new_task_id
+from task_agent import TaskClient, new_task_id
 from task_agent.protocol import (
     Planned,
     Replanning,

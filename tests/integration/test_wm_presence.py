@@ -8,7 +8,9 @@ import anyio
 import pytest
 
 from meshlink import MeshConfig, open_mesh
-from wm_store import Ontology, RobotRegistration, WmClient, WmStore, ZenohTransport, serve_store
+from wm_store import RobotRegistration, WmClient, ZenohTransport
+from wm_store.ontology import Ontology
+from wm_store.server import WmStore, serve_store
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
 

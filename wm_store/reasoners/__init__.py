@@ -6,19 +6,21 @@
 - :class:`ReasonerSet`: built-ins + ``skimesh.reasoners`` entry points + explicit factories.
 """
 
-from .base import ENTRY_POINT_GROUP as ENTRY_POINT_GROUP
-from .base import FrameCycleError as FrameCycleError
-from .base import MissingDataError as MissingDataError
-from .base import Reasoner as Reasoner
-from .base import ReasonerError as ReasonerError
-from .base import ReasonerFactory as ReasonerFactory
-from .base import ReasonerSet as ReasonerSet
-from .similarity import SimilarityReasoner as SimilarityReasoner
-from .similarity import classify as classify
-from .similarity import identify as identify
-from .similarity import property_similarity as property_similarity
-from .spatial import SpatialReasoner as SpatialReasoner
-from .spatial import Transform as Transform
+from ._base import ENTRY_POINT_GROUP as ENTRY_POINT_GROUP
+from ._base import FrameCycleError as FrameCycleError
+from ._base import MissingDataError as MissingDataError
+from ._base import Reasoner as Reasoner
+from ._base import ReasonerError as ReasonerError
+from ._base import ReasonerFactory as ReasonerFactory
+from ._base import ReasonerSet as ReasonerSet
+from ._similarity import SimilarityReasoner as SimilarityReasoner
+from ._similarity import classify as classify
+from ._similarity import identify as identify
+from ._similarity import property_similarity as property_similarity
+from ._spatial import SpatialReasoner as SpatialReasoner
+from ._spatial import Transform as Transform
+from ._spatial import quat_multiply as quat_multiply
+from ._spatial import quat_rotate as quat_rotate
 
 __all__ = [
     "ENTRY_POINT_GROUP",
@@ -34,4 +36,6 @@ __all__ = [
     "classify",
     "identify",
     "property_similarity",
+    "quat_multiply",
+    "quat_rotate",
 ]

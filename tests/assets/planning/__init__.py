@@ -1,7 +1,7 @@
 """Planning test assets: a synchronous world view over a scene, kitting skill descriptions
 as the standard library will offer them, and scene builders (``tests.assets.planning``)."""
 
-from task_agent.verify_scene import SceneView
+from task_agent.verification import SceneView
 
 from .kitting import (
     NAVIGATE,

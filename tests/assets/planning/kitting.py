@@ -34,7 +34,8 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
-from task_agent.verify_scene import SceneView
+from task_agent.verification import SceneView
+from wm_store import DeviceSpec, RobotRegistration, SkillSpec, registration_ops
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -45,9 +46,7 @@ from wm_store.protocol import (
     SetRelation,
     Value,
 )
-from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec, registration_ops
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 OBJECT = ParamSpec(name="object", type="PhysicalObject")
 LOCATION = ParamSpec(name="location", type="Location")

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from skill_agent.core import SkillEntry
-from skill_agent.skill import Skill
+from skill_agent import Skill
+from skill_agent.runtime import SkillEntry
 
 from .basic import Buggy, Fail, Noop, ProbedSkill, Slow, Wait
 from .kitting import Carry, FailThenNoop, Pick, PickAndPlace, Place, TrustingPick, Weigh

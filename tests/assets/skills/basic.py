@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import anyio
 
-from skill_agent.errors import SkillFailure
+from skill_agent import Skill, SkillContext, SkillFailure
 from skill_agent.protocol import ParamSpec, SkillDescription
-from skill_agent.skill import Skill, SkillContext
 
 from .probe import Probe
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import msgspec
 
-from skill_agent.composite import CompositeSkill, Selector, Sequence, Step
+from skill_agent import CompositeSkill, Selector, Sequence, SkillContext, Step
 from skill_agent.protocol import (
     EmptyCond,
     HasPropertyCond,
@@ -12,7 +12,6 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
-from skill_agent.skill import SkillContext
 
 from .basic import GRIPPER, ProbedSkill
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from typing import cast
 
+from skill_agent import SkillContext
 from skill_agent.protocol import HasPropertyCond, ParamSpec, RelationCond, SkillDescription
-from skill_agent.skill import SkillContext
 from wm_store import WmClient
 from wm_store.protocol import UpdateElement
 

@@ -1,9 +1,10 @@
 """The simulation benchmark's baseline is the run's own physics: replaying what the tap
 recorded every control tick (set-points, weld switches and weld poses, gripper force limits)
 with bare ``mj_step`` from the same start reproduces the run's state bit for bit, grasp
-included. (It did not while the weld's relative pose, set when a gripper grasps, was left
-out: the replayed box then sat differently in the hand, with other contacts and fewer solver
-iterations, and the baseline was up to a third cheaper than the run's physics while carrying.)"""
+included. The weld's relative pose, set when a gripper grasps, is part of what is replayed:
+without it the replayed box sits differently in the hand, with other contacts and fewer solver
+iterations, and the baseline is cheaper than the run's physics while carrying (see
+docs/benchmarks.md, section "Simulation", "What made the difference", item 11)."""
 
 from __future__ import annotations
 
@@ -14,13 +15,9 @@ import anyio
 import numpy as np
 import pytest
 
-from benchmarks.sim import step_through
-from benchmarks.sim_system import Tap, Window, WorldTruth
-from benchmarks.sim_workload import drive
-from device_drivers.drivers import sim_devices
-from device_drivers.plant import Plant
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import SimWorld, WorldOptions
+from benchmarks.sim import Tap, Window, WorldTruth, drive, step_through
+from mujoco_sim import Plant, SimWorld, WorldOptions, sim_devices
+from scenario import load_scenario
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

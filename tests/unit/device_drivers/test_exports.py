@@ -11,17 +11,8 @@ import pytest
 
 MODULES = [
     "device_drivers",
-    "device_drivers._placo",
-    "device_drivers.errors",
-    "device_drivers.gripper_model",
-    "device_drivers.ik",
-    "device_drivers.ik_dls",
-    "device_drivers.ik_placo",
-    "device_drivers.placo_export",
-    "device_drivers.robot_model",
-    "device_drivers.robot_spec",
-    "device_drivers.sim_health",
-    "device_drivers.sim_state",
+    "device_drivers.protocol",
+    "device_drivers.remote",
 ]
 
 

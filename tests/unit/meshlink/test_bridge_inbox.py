@@ -10,7 +10,7 @@ import anyio.lowlevel
 import pytest
 
 from meshlink import SubscriptionStatistics
-from meshlink.bridge import Inbox, LoopPort
+from meshlink._bridge import Inbox, LoopPort
 
 pytestmark = pytest.mark.anyio
 

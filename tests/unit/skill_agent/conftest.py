@@ -17,15 +17,13 @@ import anyio
 import msgspec
 import pytest
 
-from skill_agent.core import AgentCore, SkillEntry
 from skill_agent.protocol import RunEvent
+from skill_agent.runtime import AgentCore, SkillEntry
 from tests.assets.skills import Probe, entries
-from wm_store.client import WmClient
+from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Relation, SetRelation, UnsetRelation
-from wm_store.service import WmService
-from wm_store.store import WmStore
-from wm_store.transport import InMemoryTransport
+from wm_store.server import WmService, WmStore
 
 SCENE_OPS = [
     AddElement(type="Station", label="station-a", ref="$station"),

@@ -7,15 +7,13 @@ from pathlib import Path
 
 import msgspec
 
-from device_drivers.scenario_load import load_scenario
-from skill_agent.config import AgentConfig, load_config
-from skill_agent.plugins import SkillRegistry
-from skill_agent.scenario_wm import scenario_ops
-from task_agent.discovery_model import agents_from_view
-from task_agent.goals import parse_goal
-from task_agent.planner import Plan, Planner
-from wm_store import WmClient
-from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec
+from scenario import load_scenario
+from scenario.wm import scenario_ops
+from skill_agent.runtime import AgentConfig, SkillRegistry, load_config
+from task_agent import parse_goal
+from task_agent.discovery import agents_from_view
+from task_agent.planning import Plan, Planner
+from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIGS = ROOT / "configs" / "agents"

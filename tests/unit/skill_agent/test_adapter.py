@@ -16,9 +16,9 @@ import anyio
 import msgspec
 import pytest
 
-from meshlink import Answer, IncomingQuery, Mesh, MeshConfig, open_mesh
-from meshlink.errors import InvalidKeyError
-from skill_agent.adapter import (
+from meshlink import Answer, IncomingQuery, InvalidKeyError, Mesh, MeshConfig, open_mesh
+from skill_agent import SkillFailure
+from skill_agent.external import (
     CancelAck,
     CancelGoal,
     ExternalServiceSkill,
@@ -34,7 +34,6 @@ from skill_agent.adapter import (
     encode,
     external_skill,
 )
-from skill_agent.errors import SkillFailure
 from skill_agent.protocol import SkillDescription
 from wm_store.protocol import Element, Op, Value
 

@@ -13,18 +13,18 @@ import anyio.lowlevel
 import pytest
 
 from meshlink import Answer, IncomingQuery, KeySpace, Mesh, MeshConfig, open_mesh
-from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.config import AgentConfig
-from skill_agent.core import AgentCore, SkillEntry
-from skill_agent.errors import (
+from skill_agent import (
     AgentTransportError,
     BadRequestError,
     ParameterTypeError,
     RunStateError,
+    Skill,
+    SkillContext,
     UnknownRunError,
     UnknownSkillError,
     UnspecifiedParameterError,
 )
+from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import (
     AgentRequest,
     ErrorReply,
@@ -47,10 +47,11 @@ from skill_agent.protocol import (
     decode_request,
     encode,
 )
+from skill_agent.runtime import AgentConfig, AgentCore, SkillEntry
 from skill_agent.server import RunEventPublisher, serve_agent
-from skill_agent.skill import Skill, SkillContext
-from wm_store import InMemoryTransport, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
+from wm_store.server import WmService, WmStore
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
 

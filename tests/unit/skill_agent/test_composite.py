@@ -9,19 +9,19 @@ import anyio
 import msgspec
 import pytest
 
-from skill_agent.composite import (
+from skill_agent import (
     CompositeSkill,
     Node,
     Parallel,
     Retry,
     Selector,
     Sequence,
+    SkillLoadError,
     Step,
     check_composite,
 )
-from skill_agent.core import AgentCore, SkillEntry
-from skill_agent.errors import SkillLoadError
 from skill_agent.protocol import ParamSpec, SkillDescription, StartRun
+from skill_agent.runtime import AgentCore, SkillEntry
 from tests.assets.skills import (
     ALL,
     Pick,

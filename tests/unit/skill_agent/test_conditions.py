@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from skill_agent import SkillLoadError, UnspecifiedParameterError, WorldView
 from skill_agent.conditions import (
     Atom,
     Bindings,
@@ -27,7 +28,6 @@ from skill_agent.conditions import (
     parameters_of,
     symbolic,
 )
-from skill_agent.errors import SkillLoadError, UnspecifiedParameterError
 from skill_agent.protocol import (
     AndCond,
     Condition,
@@ -41,9 +41,8 @@ from skill_agent.protocol import (
     PropertyCond,
     RelationCond,
 )
-from skill_agent.skill import WorldView
-from task_agent.verify_scene import SceneView as PrivateScene
-from wm_store.client import WmClient
+from task_agent.verification import SceneView as PrivateScene
+from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -56,11 +55,8 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.service import WmService
-from wm_store.state import SceneState
-from wm_store.store import WmStore
-from wm_store.transactions import apply_transaction
-from wm_store.transport import InMemoryTransport
+from wm_store.scene import SceneState, apply_transaction
+from wm_store.server import WmService, WmStore
 
 ONTOLOGY = Ontology.default()
 

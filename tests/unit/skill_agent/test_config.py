@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from skill_agent.config import AgentConfig, load_config, parse_config
-from skill_agent.errors import SkillError, SkillLoadError
+from skill_agent import SkillError, SkillLoadError
 from skill_agent.protocol import ParamSpec, PropertyCond, SkillDescription
+from skill_agent.runtime import AgentConfig, load_config, parse_config
 from skimesh.commands.agent import parse_params, scenario_config_path
 from wm_store.protocol import Position
 

@@ -9,19 +9,19 @@ import itertools
 import anyio
 import pytest
 
-from skill_agent.core import AgentCore, SkillEntry
-from skill_agent.errors import (
+from skill_agent import (
     ParameterTypeError,
     PreconditionError,
     ResourceBusyError,
     RunStateError,
+    SkillContext,
     UnknownParameterError,
     UnknownRunError,
     UnknownSkillError,
     UnspecifiedParameterError,
 )
 from skill_agent.protocol import Progress, RunResult, SkillDescription, StartRun
-from skill_agent.skill import SkillContext
+from skill_agent.runtime import AgentCore, SkillEntry
 from tests.assets.skills import Noop, Probe, ProbedSkill, Wait, entries
 from tests.conftest import SlowSteps
 

@@ -9,9 +9,7 @@ import anyio.lowlevel
 import pytest
 
 from meshlink import KeySpace
-from skill_agent.core import AgentCore
-from skill_agent.errors import UnknownSkillError
-from skill_agent.events import EventLog, entry_agent, entry_run
+from skill_agent import UnknownSkillError
 from skill_agent.protocol import (
     LogEntry,
     Progress,
@@ -26,6 +24,7 @@ from skill_agent.protocol import (
     decode_log_entry,
     encode,
 )
+from skill_agent.runtime import AgentCore, EventLog, entry_agent, entry_run
 from skill_agent.server import RunEventPublisher
 from wm_store.protocol import AddElement, SetRelation
 

@@ -9,21 +9,24 @@ from typing import cast
 import anyio
 import pytest
 
-from skill_agent.errors import UnknownSkillError
-from skill_agent.events import (
-    EventLog,
+from skill_agent import SkillContext, UnknownSkillError
+from skill_agent.protocol import (
     LogEntry,
+    ParamSpec,
+    Progress,
     ProgressEntry,
     RefusedEntry,
     ResultEntry,
+    RunResult,
     RunStartedEntry,
+    SkillDescription,
+    StartRun,
     WmWriteEntry,
 )
-from skill_agent.protocol import ParamSpec, Progress, RunResult, SkillDescription, StartRun
-from skill_agent.skill import SkillContext
+from skill_agent.runtime import EventLog
 from tests.assets.skills import Probe, entries
 from tests.assets.skills.basic import ProbedSkill
-from wm_store.client import WmClient
+from wm_store import WmClient
 from wm_store.protocol import AddElement, SetRelation, UpdateElement
 
 from .conftest import AgentFactory, Kitting

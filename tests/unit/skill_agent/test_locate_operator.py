@@ -1,6 +1,6 @@
 """The person as the last sensor (FRIEND II): when no sensor sees an object, ``locate`` uses a
 recent report of where a person saw it (a pose observation whose source is an ``Operator``
-element, as ``skimesh operator --seen`` writes through :func:`task_agent.operator_sightings.
+element, as ``skimesh operator --seen`` writes through :func:`task_agent.operator.
 sighting_ops`); an old report, or one by anything but an operator, does not count."""
 
 from __future__ import annotations
@@ -9,17 +9,17 @@ from collections.abc import AsyncIterator
 
 import pytest
 
-from device_drivers.robot_spec import Pose2D
-from skill_agent.core import AgentCore
-from skill_agent.errors import SkillFailure
+from device_drivers import Pose2D
+from skill_agent import SkillFailure
 from skill_agent.protocol import Progress
+from skill_agent.runtime import AgentCore
 from skill_agent.skills import Locate
-from skill_agent.skills.locate import OPERATOR_SIGHTING_AGE
-from task_agent.operator_sightings import sighting_ops
+from skill_agent.skills._locate import OPERATOR_SIGHTING_AGE
+from task_agent.operator import sighting_ops
 from task_agent.protocol import SeenAt
 from tests.unit.skill_agent.test_skills_fakes import Rig, rig, run
+from wm_store.ontology import Cls, Prop
 from wm_store.protocol import AddElement, Observe, Pose
-from wm_store.vocab import Cls, Prop
 
 pytestmark = pytest.mark.anyio
 

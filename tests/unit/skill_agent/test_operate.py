@@ -12,19 +12,18 @@ from typing import Literal
 import anyio
 import pytest
 
-from device_drivers.errors import CommandError, DeviceBusyError
-from device_drivers.scenario_load import load_scenario
-from skill_agent.config import load_config
-from skill_agent.errors import ParameterTypeError, PreconditionError
-from skill_agent.plugins import SkillRegistry
+from device_drivers import CommandError, DeviceBusyError
+from scenario import load_scenario
+from skill_agent import ParameterTypeError, PreconditionError
 from skill_agent.protocol import Progress, RunEvent, StartRun
-from skill_agent.simulated import SimulatedOutcomes
+from skill_agent.runtime import SimulatedOutcomes, SkillRegistry, load_config
 from skill_agent.skills import HEATED, Heat, Operate, OperateStop
 from tests.unit.skill_agent.scenario_planning import plan_scenario
 from tests.unit.skill_agent.test_skills_fakes import FakeAppliance, Rig, ToyWorld, rig, run
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology, Prop, Rel
 from wm_store.protocol import SetRelation, UnsetRelation
-from wm_store.vocab import Prop, Rel
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 
@@ -32,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 
 class ButtonAppliance(FakeAppliance):
-    """Buttons as ``device_drivers.appliance_control`` handles them: ``start`` heats (refused
+    """Buttons as ``mujoco_sim.control`` handles them: ``start`` heats (refused
     with the door open or while heating), ``stop`` stops the heater, ``open`` opens the door.
     ``dud``: start is accepted but the heater does not come on. With ``hold`` set, a press
     takes effect and then waits for it (a slow answer, to stop the run meanwhile)."""

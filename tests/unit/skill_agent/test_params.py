@@ -17,9 +17,7 @@ import anyio
 import msgspec
 import pytest
 
-from skill_agent import inference
-from skill_agent.conditions import ConditionRegistry
-from skill_agent.errors import (
+from skill_agent import (
     InferenceError,
     ParameterError,
     ParameterTypeError,
@@ -27,15 +25,18 @@ from skill_agent.errors import (
     UnknownParameterError,
     UnspecifiedParameterError,
 )
-from skill_agent.inference import describe_query, world_position
-from skill_agent.params import (
+from skill_agent.conditions import ConditionRegistry
+from skill_agent.parameters import (
     VALUE_KINDS,
     check_description,
     check_kind,
+    describe_query,
     is_value_kind,
     param_states,
     specify,
+    world_position,
 )
+from skill_agent.parameters import _inference as inference
 from skill_agent.protocol import (
     AndCond,
     Condition,
@@ -50,7 +51,7 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
-from wm_store.client import WmClient
+from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -66,9 +67,7 @@ from wm_store.protocol import (
     UnsetRelation,
     Value,
 )
-from wm_store.service import WmService
-from wm_store.store import WmStore
-from wm_store.transport import InMemoryTransport
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 ONTOLOGY = Ontology.default()

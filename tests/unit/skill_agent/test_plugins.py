@@ -13,16 +13,15 @@ from pathlib import Path
 import pytest
 
 from docs.examples import test_pick_part as guide
-from skill_agent.adapter import ExternalServiceSkill
-from skill_agent.config import ServiceSkillConfig
-from skill_agent.errors import SkillLoadError
-from skill_agent.plugins import ENTRY_POINT_GROUP, SkillRegistry
+from skill_agent import SkillLoadError
+from skill_agent.external import ExternalServiceSkill
 from skill_agent.protocol import SkillDescription
+from skill_agent.runtime import ENTRY_POINT_GROUP, ServiceSkillConfig, SkillRegistry
 from wm_store.ontology import Ontology
 
 HEADER = """
 from skill_agent.protocol import ParamSpec, RelationCond, SkillDescription, CustomCond
-from skill_agent.skill import Skill
+from skill_agent import Skill
 """
 
 SKILLS = (
@@ -158,7 +157,7 @@ def test_entry_points(
     def entry_points(*, group: str) -> metadata.EntryPoints:
         return installed.select(group=group)
 
-    monkeypatch.setattr("skill_agent.plugins.metadata.entry_points", entry_points)
+    monkeypatch.setattr("skill_agent.runtime._plugins.metadata.entry_points", entry_points)
     entries = SkillRegistry(ontology, entry_points=["pick"]).load()
     assert list(entries) == ["pick"]
     assert entries["pick"].source == f"{mod}:Pick (entry point 'pick')"

@@ -9,14 +9,14 @@ import math
 import anyio
 import pytest
 
-from device_drivers.errors import (
+from device_drivers import (
     CollisionError,
     GraspLostError,
     MotionTimeoutError,
+    Pose2D,
     UnreachableError,
+    WorldPose,
 )
-from device_drivers.interfaces import WorldPose
-from device_drivers.robot_spec import Pose2D
 from skill_agent.primitives import (
     GripperGeometry,
     NoGraspError,
@@ -56,7 +56,7 @@ from tests.unit.skill_agent.test_skills_fakes import (
     ToyWorld,
 )
 from wm_store.protocol import Orientation, Pose, Position, SizeCuboid, SizeCylinder, SizeSphere
-from wm_store.reasoners.spatial import Transform
+from wm_store.reasoners import Transform
 
 DOWN = WorldPose(0.5, 0.0, 0.9, 1.0, 0.0, 0.0, 0.0)  # tcp z pointing at the floor
 

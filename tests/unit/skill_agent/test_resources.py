@@ -7,8 +7,8 @@ import anyio
 import anyio.abc
 import pytest
 
-from skill_agent.errors import ResourceBusyError
-from skill_agent.resources import LockStats, ResourceLocks
+from skill_agent import ResourceBusyError
+from skill_agent.runtime import LockStats, ResourceLocks
 
 pytestmark = pytest.mark.anyio
 

@@ -10,11 +10,9 @@ import anyio
 import msgspec
 import pytest
 
-from skill_agent.errors import RunStateError
-from skill_agent.events import WmWriteEntry
-from skill_agent.protocol import Progress, RunResult, SkillDescription, StartRun
-from skill_agent.run import RunContext
-from skill_agent.skill import SkillContext
+from skill_agent import RunStateError, SkillContext
+from skill_agent.protocol import Progress, RunResult, SkillDescription, StartRun, WmWriteEntry
+from skill_agent.runtime import RunContext
 from tests.assets.skills import Carry, Pick, Probe, ProbedSkill, Slow, Wait, entries
 from wm_store.protocol import Change, UpdateElement
 

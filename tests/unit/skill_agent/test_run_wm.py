@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from skill_agent.run_wm import RunWm
-from wm_store.client import WmClient
-from wm_store.errors import WmError
+from skill_agent.runtime import RunWm
+from wm_store import WmClient, WmError
 from wm_store.protocol import Op, Transact, TransactReply, UpdateElement
 
 from .conftest import Kitting

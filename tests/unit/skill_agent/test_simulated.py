@@ -8,9 +8,9 @@ import math
 import anyio
 import pytest
 
-from skill_agent.errors import SkillLoadError
+from skill_agent import SkillLoadError
 from skill_agent.protocol import SkillDescription, StartRun
-from skill_agent.simulated import SimulatedOutcomes, skill_probability
+from skill_agent.runtime import SimulatedOutcomes, skill_probability
 from tests.assets.skills import Noop, Pick, PickAndPlace, Place, Probe, Slow, entries
 
 from .conftest import AgentFactory, Kitting

@@ -1,7 +1,7 @@
 """The standard skills' descriptions: they pass the load checks against the real ontology,
 every condition has a planner face (except the documented run-time-only ones), the agent
 configs of both scenarios load them, and a real planner reaches the scenarios' goals with them
-over the scenes ``skill_agent.scenario_wm`` builds."""
+over the scenes ``scenario.wm`` builds."""
 
 from __future__ import annotations
 
@@ -12,15 +12,16 @@ import anyio
 import msgspec
 import pytest
 
-from device_drivers.scenario_load import load_scenario
+from scenario import load_scenario
 from skill_agent.conditions import describe, symbolic
-from skill_agent.config import load_config
-from skill_agent.params import check_description, is_value_kind
-from skill_agent.plugins import SkillRegistry
+from skill_agent.parameters import check_description, is_value_kind
 from skill_agent.protocol import SkillDescription
+from skill_agent.runtime import SkillRegistry, load_config
 from skill_agent.skills import ALL_SKILLS, HEATED, RUNTIME_ONLY
 from tests.unit.skill_agent.scenario_planning import plan_scenario
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
+from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIGS = ROOT / "configs" / "agents"

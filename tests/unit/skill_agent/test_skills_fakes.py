@@ -1,6 +1,6 @@
 """Fake devices for the skill-library tests: small implementations of the device Protocols
 over a toy "world" of object poses, and a harness running an :class:`AgentCore` on an
-in-memory world model loaded from a scenario (``skill_agent.scenario_wm``).
+in-memory world model loaded from a scenario (``scenario.wm``).
 
 The toy world: the arm's tcp goes where it is told; the gripper grasps the object whose centre
 is nearest the tcp (if within 6 cm) when it closes, and the held object moves with the tcp;
@@ -21,30 +21,32 @@ import anyio
 import anyio.lowlevel
 import pytest
 
-from device_drivers.errors import DeviceError, GraspLostError
-from device_drivers.interfaces import (
+from device_drivers import (
     Appliance,
     ApplianceState,
     Arm,
     ArmState,
     BaseState,
     Detection,
+    DeviceError,
+    GraspLostError,
     Gripper,
     GripperState,
     MobileBase,
     ObjectSensor,
+    Pose2D,
     ProgressCallback,
     WorldPose,
 )
-from device_drivers.robot_spec import Pose2D
-from device_drivers.scenario_load import load_scenario
-from skill_agent.core import AgentCore, SkillEntry
+from scenario import load_scenario
+from scenario.wm import scenario_ops
+from skill_agent import Skill
 from skill_agent.protocol import RunResult, StartRun
-from skill_agent.scenario_wm import scenario_ops
-from skill_agent.simulated import SimulatedOutcomes
-from skill_agent.skill import Skill
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillEntry
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
 from wm_store.protocol import Pose
+from wm_store.server import WmService, WmStore
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "configs" / "scenarios"
 

@@ -12,26 +12,22 @@ import anyio
 import msgspec
 import pytest
 
-from device_drivers.errors import UnreachableError
-from device_drivers.robot_spec import Pose2D
+from device_drivers import Pose2D, UnreachableError
+from skill_agent import ParameterTypeError, PreconditionError
 from skill_agent.conditions import describe, symbolic
-from skill_agent.config import load_config
-from skill_agent.core import AgentCore
-from skill_agent.errors import ParameterTypeError, PreconditionError
-from skill_agent.params import check_description
+from skill_agent.parameters import check_description
 from skill_agent.protocol import Progress, RunEvent, StartRun
-from skill_agent.simulated import SimulatedOutcomes
-from skill_agent.skills import Locate, Navigate, Pick, Place
-from skill_agent.skills.place import PlaceOn
-from skill_agent.skills.sensing import move_ops
-from task_agent.discovery_model import agents_from_view
-from task_agent.goals import parse_goal
-from task_agent.planner import Planner
+from skill_agent.runtime import AgentCore, SimulatedOutcomes, load_config
+from skill_agent.skills import Locate, Navigate, Pick, Place, PlaceOn
+from skill_agent.skills._sensing import move_ops
+from task_agent import parse_goal
+from task_agent.discovery import agents_from_view
+from task_agent.planning import Planner
 from tests.unit.skill_agent.scenario_planning import CONFIGS, register_agent
 from tests.unit.skill_agent.test_skills_fakes import FakeArm, FakeGripper, Rig, rig, run
-from wm_store import Ontology, WmClient
+from wm_store import WmClient
+from wm_store.ontology import Ontology, Prop, Rel
 from wm_store.protocol import Pose, Value
-from wm_store.vocab import Prop, Rel
 
 pytestmark = pytest.mark.anyio
 
@@ -85,7 +81,7 @@ async def test_navigate_moves_the_robot_and_what_it_carries(kit: Rig, r1: AgentC
 
 
 async def test_navigate_refuses_a_goal_where_the_robot_is(kit: Rig, r1: AgentCore) -> None:
-    from skill_agent.errors import PreconditionError
+    from skill_agent import PreconditionError
 
     with pytest.raises(PreconditionError, match="at"):
         await r1.start(StartRun(skill="navigate", params={"goal": kit["r1-home"]}))
@@ -175,7 +171,7 @@ async def test_an_unreachable_grasp_fails_before_closing(kit: Rig, r1: AgentCore
 
 
 async def test_pick_needs_the_robot_at_the_objects_location(kit: Rig, r1: AgentCore) -> None:
-    from skill_agent.errors import PreconditionError
+    from skill_agent import PreconditionError
 
     params: dict[str, Value] = {
         "object": kit["Gear-1"],
@@ -347,7 +343,7 @@ async def test_place_on_needs_a_surface_where_the_robot_is(kit: Rig, r1: AgentCo
 
 async def test_a_planner_puts_a_part_on_a_shelf_with_place_on(kit: Rig) -> None:
     config = load_config(CONFIGS / "kitting" / "r1.toml")
-    paths = [*config.skills.paths, "skill_agent.skills.place:PlaceOn"]
+    paths = [*config.skills.paths, "skill_agent.skills:PlaceOn"]
     config = msgspec.structs.replace(
         config, skills=msgspec.structs.replace(config.skills, paths=paths)
     )

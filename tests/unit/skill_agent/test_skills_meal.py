@@ -9,10 +9,10 @@ from collections.abc import AsyncIterator
 import anyio
 import pytest
 
-from device_drivers.robot_spec import Pose2D
-from skill_agent.errors import PreconditionError
+from device_drivers import Pose2D
+from skill_agent import PreconditionError
 from skill_agent.protocol import StartRun
-from skill_agent.simulated import SimulatedOutcomes
+from skill_agent.runtime import SimulatedOutcomes
 from skill_agent.skills import (
     HEATED,
     ApplianceCloseDoor,
@@ -25,11 +25,11 @@ from skill_agent.skills import (
     Serve,
     TakeOut,
 )
-from skill_agent.skills.doors import handle_pose
+from skill_agent.skills._doors import handle_pose
 from tests.unit.skill_agent.test_skills_fakes import FakeAppliance, FakeArm, Rig, rig, run
+from wm_store.ontology import Prop, Rel
 from wm_store.protocol import SetRelation, UnsetRelation, Value
-from wm_store.reasoners.spatial import Transform
-from wm_store.vocab import Prop, Rel
+from wm_store.reasoners import Transform
 
 pytestmark = pytest.mark.anyio
 

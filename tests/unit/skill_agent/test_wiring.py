@@ -12,20 +12,27 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.scenario_load import load_scenario
+from scenario import load_scenario
+from scenario.wm import scenario_ops, template_capacity
+from skill_agent import ParameterError, SkillLoadError
 from skill_agent.conditions import evaluate
-from skill_agent.config import load_config, parse_config
-from skill_agent.errors import ParameterError, SkillLoadError
-from skill_agent.params import specify
-from skill_agent.scenario_wm import scenario_ops, template_capacity
+from skill_agent.parameters import specify
+from skill_agent.runtime import (
+    WiringError,
+    bind_devices,
+    bind_hardware,
+    element_for_label,
+    load_config,
+    parse_config,
+)
 from skill_agent.server import agent_registration
 from skill_agent.skills import Locate, Pick
-from skill_agent.skills.params import not_full
-from skill_agent.wiring import WiringError, bind_devices, bind_hardware, element_for_label
+from skill_agent.skills._params import not_full
 from skimesh.commands.agent import scenario_config_path
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology, Prop
 from wm_store.protocol import AddElement, Relation
-from wm_store.vocab import Prop
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

@@ -8,13 +8,15 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.scenario_load import load_scenario
-from device_drivers.world import WorldOptions, running_world
-from skill_agent.scenario_wm import scenario_ops
-from skimesh.demo_check import goal_holds, verify_goal
-from task_agent.goals import parse_goal
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from mujoco_sim import WorldOptions, running_world
+from scenario import load_scenario
+from scenario.wm import scenario_ops
+from skimesh.demo import goal_holds, verify_goal
+from task_agent import parse_goal
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
 from wm_store.protocol import SetRelation, UnsetRelation, UpdateElement
+from wm_store.server import WmService, WmStore
 
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 

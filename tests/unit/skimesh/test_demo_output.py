@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import re
 
-from skimesh.demo_check import FactCheck, goal_holds
-from skimesh.demo_mission import MissionResult, summary_lines
-from skimesh.demo_output import MissionView
+from skimesh.demo import FactCheck, MissionResult, MissionView, goal_holds, summary_lines
 from task_agent.protocol import (
     Planned,
     PlannedStep,

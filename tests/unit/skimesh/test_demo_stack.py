@@ -9,11 +9,13 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.scenario_load import load_scenario
+from scenario import load_scenario
 from skimesh.commands.demo import mission_goal
-from skimesh.demo_stack import DemoError, StackOptions, agent_configs, demo_stack
-from wm_store import Ontology, StoreConfig, WmStore
+from skimesh.demo import StackOptions, agent_configs, demo_stack
+from skimesh.errors import DemoError
+from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Transact
+from wm_store.server import StoreConfig, WmStore
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "configs" / "scenarios"
 

@@ -11,9 +11,9 @@ import pytest
 import rerun as rr
 import rerun.chunk
 
-from device_drivers.scenario_load import load_scenario
-from skill_agent.config import load_config
-from skill_agent.scenario_wm import scenario_ops
+from scenario import load_scenario
+from scenario.wm import scenario_ops
+from skill_agent.runtime import load_config
 from skill_agent.server import agent_registration
 from skill_agent.skills import Navigate, Pick, Place
 from skimesh.recording import CallText, MissionRecording, describe_change, step_text
@@ -28,8 +28,10 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
 from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
+from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 LABELS = {"KitBox-1": "kit", "Gear-1": "gear"}

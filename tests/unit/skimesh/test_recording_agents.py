@@ -19,8 +19,7 @@ from skill_agent.protocol import (
     RunStartedEntry,
     WmWriteEntry,
 )
-from skimesh.recording import MissionRecording
-from skimesh.recording_agents import describe_ops, entry_line
+from skimesh.recording import MissionRecording, describe_ops, entry_line
 from wm_store.protocol import (
     AddElement,
     Observe,

@@ -5,8 +5,8 @@ from __future__ import annotations
 import msgspec
 import pytest
 
-from task_agent.discovery_model import AgentInfo, agents_from_view, decode_description
-from task_agent.errors import DiscoveryError
+from task_agent import DiscoveryError
+from task_agent.discovery import AgentInfo, agents_from_view, decode_description
 from tests.assets.planning import NAVIGATE, PICK, PLACE, apply_ops, kitting_scene
 from wm_store.protocol import AddElement, Element, Relation, UpdateElement
 

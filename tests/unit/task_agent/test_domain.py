@@ -13,10 +13,9 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
-from task_agent.discovery_model import AgentInfo, agents_from_view
-from task_agent.domain import ROOT, ForallDelete, Lit, PlanningTask, build_task
-from task_agent.errors import DomainError
-from task_agent.goals import parse_goal
+from task_agent import DomainError, parse_goal
+from task_agent.discovery import AgentInfo, agents_from_view
+from task_agent.domain import ROOT_TYPE, ForallDelete, Lit, PlanningTask, build_task
 from task_agent.reachability import GroundStep, State, apply, relevant_objects, replay
 from tests.assets.planning import (
     NAVIGATE,
@@ -84,7 +83,11 @@ def test_one_action_per_agent_and_skill(kitting: tuple[KittingScene, PlanningTas
 
 def test_types_objects_and_initial_facts(kitting: tuple[KittingScene, PlanningTask]) -> None:
     scene, task = kitting
-    assert task.types == {"PhysicalObject": ROOT, "Container": "PhysicalObject", "Location": ROOT}
+    assert task.types == {
+        "PhysicalObject": ROOT_TYPE,
+        "Container": "PhysicalObject",
+        "Location": ROOT_TYPE,
+    }
     assert task.objects["Gear-1"] == task.objects["Gripper-1"] == "PhysicalObject"
     assert task.objects["KitBox-1"] == task.objects["PartBox-1"] == "Container"
     assert task.objects["Station-1"] == task.objects[scene.depot] == "Location"
@@ -231,7 +234,7 @@ def test_classes_the_type_tree_cannot_hold_become_static_predicates() -> None:
     assert {p for p in task.predicates if p.startswith("is_")} == {"is_Furniture"}
     assert ("is_Furniture", ("Shelf-1",)) in task.init
     shift = task.actions["shift__r1"]
-    assert shift.params == (("thing", ROOT), ("to", "Location"))
+    assert shift.params == (("thing", ROOT_TYPE), ("to", "Location"))
     assert Lit("is_Furniture", ("?thing",)) in shift.pre
 
 

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 import anyio
 import pytest
 
-from task_agent.execution_state import unmet_goal
-from task_agent.goals import parse_goal
+from task_agent import parse_goal
+from task_agent.execution import unmet_goal
 from task_agent.protocol import (
     Call,
     Parallel,

@@ -14,10 +14,10 @@ from skill_agent.protocol import (
     PropertyCond,
     RelationCond,
 )
-from task_agent.errors import GoalParseError
-from task_agent.goals import (
+from task_agent import (
     Goal,
     GoalLiteral,
+    GoalParseError,
     PropertyGoal,
     RelationGoal,
     check_goal,

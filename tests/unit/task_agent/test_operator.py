@@ -13,9 +13,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skill_agent.core import AgentCore
-from task_agent.execution_state import OPERATOR_NOTE
-from task_agent.goals import parse_goal
+from skill_agent.runtime import AgentCore
+from task_agent import parse_goal
+from task_agent.execution import OPERATOR_NOTE
 from task_agent.operator import OperatorDesk, OperatorService, SkillMirror
 from task_agent.protocol import (
     AnswerPending,

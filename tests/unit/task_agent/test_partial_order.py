@@ -9,14 +9,21 @@ import pytest
 from msgspec import json
 
 from skill_agent.protocol import ParamSpec, PropertyCond, SkillDescription
-from task_agent.discovery_model import agents_from_view
+from task_agent import parse_goal
+from task_agent.discovery import agents_from_view
 from task_agent.domain import PlanningTask, build_task
-from task_agent.goals import parse_goal
-from task_agent.partial_order import PartialOrderPlan, to_partial_order
-from task_agent.planner import Engine, Plan, Planner, PlanStats, PlanStep
+from task_agent.planning import (
+    Engine,
+    PartialOrderPlan,
+    Plan,
+    Planner,
+    PlanStats,
+    PlanStep,
+    to_partial_order,
+)
 from task_agent.reachability import replay
 from tests.assets.planning import apply_ops, kitting_scene
-from wm_store.registration import RobotRegistration, SkillSpec, registration_ops
+from wm_store import RobotRegistration, SkillSpec, registration_ops
 
 CHECK = SkillDescription(
     name="check",

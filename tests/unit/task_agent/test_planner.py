@@ -15,12 +15,11 @@ from unified_planning.io import PDDLReader
 from unified_planning.model import Problem
 from up_kairos import KairosValidator
 
-from task_agent import planner as planner_module
-from task_agent.discovery_model import agents_from_view
+from task_agent import Goal, PlannerTimeoutError, UnsolvableError, parse_goal
+from task_agent.discovery import agents_from_view
 from task_agent.domain import PlanningTask, build_task
-from task_agent.errors import PlannerTimeoutError, UnsolvableError
-from task_agent.goals import Goal, parse_goal
-from task_agent.planner import Engine, Plan, Planner, to_unified_planning, to_up_plan
+from task_agent.planning import Engine, Plan, Planner, to_unified_planning, to_up_plan
+from task_agent.planning import _planner as planner_module
 from tests.assets.planning import (
     NAVIGATE,
     OPEN_DOOR,

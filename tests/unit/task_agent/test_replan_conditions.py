@@ -13,9 +13,10 @@ import anyio
 import msgspec
 import pytest
 
-from skill_agent.core import AgentCore
+from skill_agent.runtime import AgentCore
+from task_agent import parse_goal
 from task_agent.discovery import Discovery
-from task_agent.goals import parse_goal
+from task_agent.execution import CoreRunner
 from task_agent.protocol import (
     Planned,
     Replanning,
@@ -24,14 +25,13 @@ from task_agent.protocol import (
     StepStarted,
     TaskFinished,
 )
-from task_agent.runners import CoreRunner
 from tests.assets.skills import Probe, ProbedSkill, entries
 from tests.assets.skills.replanning import PART_NUMBER, Convey, Stow
 from tests.assets.task_fleet import Fleet
-from wm_store import InMemoryTransport, WmClient, WmService, WmStore
+from wm_store import InMemoryTransport, RobotRegistration, SkillSpec, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Relation, SetRelation, UnsetRelation
-from wm_store.registration import RobotRegistration, SkillSpec
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

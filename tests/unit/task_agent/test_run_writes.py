@@ -8,10 +8,9 @@ import anyio
 import pytest
 
 from skill_agent.protocol import ResultEntry, RunResult, WmWriteEntry
-from task_agent.executor import Executor
-from task_agent.goals import parse_goal
+from task_agent import parse_goal
+from task_agent.execution import Executor, RunWrites
 from task_agent.protocol import StepFinished, StepStarted
-from task_agent.run_writes import RunWrites
 from tests.assets.task_fleet import PLANNER, fleet
 
 pytestmark = pytest.mark.anyio

@@ -19,14 +19,15 @@ from pathlib import Path
 import anyio
 import pytest
 
-from device_drivers.scenario_load import load_scenario
-from skill_agent.config import AgentConfig, load_config
-from skill_agent.scenario_wm import scenario_ops
-from task_agent.discovery_model import agents_from_view
-from task_agent.partial_order import to_partial_order
+from scenario import load_scenario
+from scenario.wm import scenario_ops
+from skill_agent.runtime import AgentConfig, load_config
+from task_agent.discovery import agents_from_view
+from task_agent.planning import to_partial_order
 from tests.unit.skill_agent.scenario_planning import plan_scenario, register_agent
-from wm_store import InMemoryTransport, Ontology, WmClient, WmService, WmStore
-from wm_store.registration import DeviceSpec, RobotRegistration
+from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, WmClient
+from wm_store.ontology import Ontology
+from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIGS = ROOT / "configs" / "agents"

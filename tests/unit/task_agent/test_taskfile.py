@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from task_agent.errors import VerificationError
+from task_agent import VerificationError
 from task_agent.protocol import Call, Parallel, Sequence, TaskBlock, TaskFile
 from task_agent.taskfile import (
     Ref,

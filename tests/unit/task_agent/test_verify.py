@@ -11,9 +11,8 @@ from pathlib import Path
 import msgspec
 import pytest
 
-from device_drivers.scenario_load import load_scenario
-from skill_agent.config import load_config
-from skill_agent.plugins import SkillRegistry
+from scenario import load_scenario
+from scenario.wm import scenario_ops
 from skill_agent.protocol import (
     CustomCond,
     ParamSpec,
@@ -21,17 +20,15 @@ from skill_agent.protocol import (
     RelationCond,
     SkillDescription,
 )
-from skill_agent.scenario_wm import scenario_ops
-from task_agent.discovery_model import AgentInfo
+from skill_agent.runtime import SkillRegistry, load_config
+from task_agent.discovery import AgentInfo
 from task_agent.protocol import Call, Parallel, TaskFile, VerifyProblem
 from task_agent.protocol import Sequence as Seq
 from task_agent.taskfile import load_task_file, read_task_file
-from task_agent.verify import check, verify
-from task_agent.verify_scene import SceneView
+from task_agent.verification import SceneView, check, verify
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Query, Relation, UpdateElement, Value
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 ROOT = Path(__file__).resolve().parents[3]
 TASKS = ROOT / "tests" / "assets" / "tasks"

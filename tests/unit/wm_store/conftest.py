@@ -6,8 +6,7 @@ import pytest
 
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Pose, Position, Relation, SizeCuboid
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 
 @pytest.fixture(scope="session")

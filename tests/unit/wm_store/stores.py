@@ -7,7 +7,7 @@ from contextlib import asynccontextmanager
 
 import anyio
 
-from wm_store.store import WmStore
+from wm_store.server import WmStore
 
 __all__ = ["running"]
 

@@ -9,8 +9,7 @@ from contextlib import asynccontextmanager
 import anyio
 import pytest
 
-from wm_store.client import WmClient
-from wm_store.errors import CardinalityError, ElementNotFoundError
+from wm_store import CardinalityError, ElementNotFoundError, InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -24,9 +23,7 @@ from wm_store.protocol import (
     decode_reply,
     encode,
 )
-from wm_store.service import WmService
-from wm_store.store import WmStore
-from wm_store.transport import InMemoryTransport
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

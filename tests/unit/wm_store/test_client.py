@@ -8,12 +8,16 @@ from contextlib import asynccontextmanager
 import anyio
 import pytest
 
-from wm_store.client import WmClient
-from wm_store.errors import (
+from wm_store import (
     ConflictError,
+    DeviceSpec,
     ElementNotFoundError,
+    InMemoryTransport,
     RevisionTimeoutError,
+    RobotRegistration,
+    SkillSpec,
     TransportError,
+    WmClient,
 )
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
@@ -25,10 +29,7 @@ from wm_store.protocol import (
     TemplateDef,
     Transact,
 )
-from wm_store.registration import DeviceSpec, RobotRegistration, SkillSpec
-from wm_store.service import WmService
-from wm_store.store import WmStore
-from wm_store.transport import InMemoryTransport
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

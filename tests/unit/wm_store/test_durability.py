@@ -17,9 +17,8 @@ from typing import Any
 import anyio
 import pytest
 
-from wm_store.durability import Durability, DurabilityMode, Recovered
-from wm_store.errors import StorageError
-from wm_store.wal import WriteAheadLog
+from wm_store import StorageError
+from wm_store.durability import Durability, DurabilityMode, Recovered, WriteAheadLog
 
 pytestmark = pytest.mark.anyio
 

@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from wm_store.errors import ValidationError
+from wm_store import ValidationError
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -28,9 +28,8 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.query import id_sort_key, resolve
-from wm_store.state import SceneState, Undo
-from wm_store.store import WmStore
+from wm_store.scene import SceneState, Undo, id_sort_key, resolve
+from wm_store.server import WmStore
 
 BASE = Ontology.default()
 RUNTIME = (ClassDef(name="Widget", parent="Part"), ClassDef(name="MiniWidget", parent="Widget"))

@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from rdflib import XSD, Graph, Literal, URIRef
 
-from wm_store.errors import (
+from wm_store import (
     CardinalityError,
     OntologyError,
     PropertyValueError,

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from wm_store.errors import UnknownClassError
+from wm_store import UnknownClassError
 from wm_store.ontology import Ontology
 from wm_store.protocol import Element, Pose, Position, PropertyFilter, Query, Relation
-from wm_store.query import id_sort_key, match_relations, resolve
-from wm_store.state import SceneState
+from wm_store.scene import SceneState, id_sort_key, match_relations, resolve
 
 Kitting = tuple[SceneState, dict[str, str]]
 

@@ -13,7 +13,7 @@ from rdflib import Graph, Literal, URIRef
 from rdflib.compare import isomorphic
 from rdflib.namespace import OWL, RDF, RDFS, XSD
 
-from wm_store.errors import (
+from wm_store import (
     OntologyError,
     PropertyValueError,
     UnknownClassError,
@@ -38,8 +38,7 @@ from wm_store.protocol import (
     Value,
 )
 from wm_store.rdf import SCENE, export_turtle, import_turtle, scene_graph
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 ROOT = Path(__file__).resolve().parents[3]
 SKM = "https://skimesh.dev/ontology#"

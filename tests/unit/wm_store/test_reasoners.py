@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from wm_store.errors import ElementNotFoundError, UnknownClassError, ValidationError
+from wm_store import ElementNotFoundError, UnknownClassError, ValidationError
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     Color,
@@ -36,10 +36,10 @@ from wm_store.reasoners import (
     classify,
     identify,
     property_similarity,
+    quat_multiply,
+    quat_rotate,
 )
-from wm_store.reasoners.spatial import quat_multiply, quat_rotate
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 ROOT = Path(__file__).resolve().parents[3]
 S = math.sqrt(0.5)

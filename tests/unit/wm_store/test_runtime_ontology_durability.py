@@ -11,8 +11,7 @@ import anyio
 import pytest
 
 from tests.unit.wm_store.stores import running
-from wm_store.client import WmClient
-from wm_store.errors import OntologyError, PropertyValueError
+from wm_store import InMemoryTransport, OntologyError, PropertyValueError, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -25,9 +24,7 @@ from wm_store.protocol import (
     TemplateDef,
     Transact,
 )
-from wm_store.service import WmService
-from wm_store.store import StoreConfig, WmStore
-from wm_store.transport import InMemoryTransport
+from wm_store.server import StoreConfig, WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

@@ -27,8 +27,7 @@ from wm_store.protocol import (
     decode_reply,
     encode,
 )
-from wm_store.service import WmService
-from wm_store.store import WmStore
+from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from wm_store.errors import StorageError
-from wm_store.snapshots import SnapshotFiles
+from wm_store import StorageError
+from wm_store.durability import SnapshotFiles
 
 
 def corrupt(path: Path, offset: int) -> None:

@@ -6,12 +6,11 @@ from __future__ import annotations
 import anyio
 import pytest
 
-from wm_store.errors import ValidationError
+from wm_store import ValidationError
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, ClassDef, Relation, UpdateElement
-from wm_store.sparql import SparqlEngine
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.rdf import SparqlEngine
+from wm_store.scene import SceneState, apply_transaction
 
 Kitting = tuple[SceneState, dict[str, str]]
 

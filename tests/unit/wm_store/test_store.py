@@ -8,10 +8,10 @@ import anyio
 import pytest
 
 from tests.unit.wm_store.stores import running
-from wm_store.errors import ConflictError, HistoryCompactedError, ValidationError
+from wm_store import ConflictError, HistoryCompactedError, ValidationError
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Change, Relation, Transact, UpdateElement
-from wm_store.store import StoreConfig, WmStore
+from wm_store.server import StoreConfig, WmStore
 
 pytestmark = pytest.mark.anyio
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import msgspec
 import pytest
 
-from wm_store.errors import (
+from wm_store import (
     CardinalityError,
     ConflictError,
     DuplicateIdError,
@@ -35,8 +35,7 @@ from wm_store.protocol import (
     UnsetRelation,
     UpdateElement,
 )
-from wm_store.state import SceneState
-from wm_store.transactions import apply_transaction
+from wm_store.scene import SceneState, apply_transaction
 
 Kitting = tuple[SceneState, dict[str, str]]
 

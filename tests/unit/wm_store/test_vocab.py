@@ -1,4 +1,5 @@
-"""``wm_store/vocab.py`` is generated from the core ontology and must stay in step with it."""
+"""``wm_store/ontology/_vocab.py`` is generated from the core ontology and must stay in step
+with it."""
 
 from __future__ import annotations
 
@@ -8,8 +9,8 @@ from types import ModuleType
 
 import pytest
 
-from wm_store import vocab
 from wm_store.ontology import Ontology, core_ontology_path
+from wm_store.ontology import _vocab as vocab
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -30,8 +31,10 @@ def constants(holder: type) -> dict[str, str]:
 
 def test_vocab_is_up_to_date(gen_vocab: ModuleType) -> None:
     expected = gen_vocab.render(Ontology.load(core_ontology_path()))
-    current = (ROOT / "wm_store" / "vocab.py").read_text(encoding="utf-8")
-    assert current == expected, "wm_store/vocab.py is stale: run `python scripts/gen_vocab.py`"
+    current = (ROOT / "wm_store" / "ontology" / "_vocab.py").read_text(encoding="utf-8")
+    assert current == expected, (
+        "wm_store/ontology/_vocab.py is stale: run `python scripts/gen_vocab.py`"
+    )
 
 
 @pytest.mark.parametrize(

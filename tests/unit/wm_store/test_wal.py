@@ -13,8 +13,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from wm_store.errors import CorruptLogError, StorageError
-from wm_store.wal import RecoveryReport, WriteAheadLog
+from wm_store import CorruptLogError, StorageError
+from wm_store.durability import RecoveryReport, WriteAheadLog
 
 
 def payload(seq: int) -> bytes:

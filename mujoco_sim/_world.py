@@ -1,0 +1,539 @@
+"""``SimWorld``: one MuJoCo world for a scenario, stepped in a worker thread, driven from anyio.
+
+Threading model (every crossing is here or in the modules it names):
+
+- **Event loop**: drivers, the remote server, tests. They *queue* jobs
+  (:class:`~mujoco_sim.control.Job`) into a ``deque`` and wait on the job's
+  ``anyio.Event``; they *read* state from the latest :class:`~mujoco_sim.
+  Snapshot` (immutable copies). The loop never touches ``MjModel``/``MjData``.
+- **Simulation thread**: :meth:`SimWorld.run` calls ``anyio.to_thread.run_sync(plant.run_batch,
+  ..., limiter=CapacityLimiter(1))`` in a loop. A batch takes the queued jobs, runs the
+  controllers at the control rate (100 Hz) between ``mj_step(m, d, nstep=5)`` calls, checks
+  the state, copies a snapshot and returns the finished jobs; back on the loop the runner sets
+  their events and calls progress callbacks (fast mode: one call runs many batches and hands
+  jobs over as they finish, see "Pacing"). :meth:`SimWorld.call` runs any function on the
+  model through the same limiter (ground truth such as contacts, test hooks). Only one thread
+  at a time ever holds the model, whichever pool thread it is.
+- **IK threads**: :meth:`SimWorld.solve_ik` runs placo (and DLS as fallback) on each robot's
+  own solver objects through ``to_thread`` with a per-robot limiter, so checking a tool target
+  never stalls stepping (:mod:`mujoco_sim`).
+- **Recorder**: logs from the simulation thread (rerun's SDK batches and sends on its own
+  threads); optional camera images are rendered on a thread the recorder owns.
+
+Pacing: real time (default) runs each batch when the wall clock says its ticks are due
+(``anyio.sleep`` in between); if the simulation falls behind by more than ``slip`` seconds it
+gives up catching up and counts a slip. While something moves by command, a job waits or an
+alarm is near, that is every tick (10 ms); a *quiet* world sleeps until a whole batch is due
+(``batch``, 50 ms) or until news (a command, a :meth:`SimWorld.call`, an alarm) wakes it, and
+then first runs the ticks due by then, so the news starts at the present tick: an idle world
+in real time then costs a small share of a core (see docs/benchmarks.md, section Simulation).
+The pacing strategies are :class:`~mujoco_sim._pacing.RealTimePacing` and
+:class:`~mujoco_sim._pacing.FastPacing`; the state the runner keeps is split by owning thread
+(:class:`~mujoco_sim._runner_state.LoopState`, :class:`~mujoco_sim._runner_state.ThreadState`).
+
+``fast`` runs batches back to back in one thread call (a *run*) that returns only when a job
+that reports progress advanced, when :meth:`SimWorld.call` waits, when the world is stopped,
+and after ``fast_handover`` wall seconds at most. Meanwhile the simulation thread hands the
+loop two kinds of news:
+
+- **events**: a job finished, or a :meth:`SimWorld.wait_time` alarm came due. Each is posted
+  to the loop at once (through :class:`~mujoco_sim.LoopPost`, with a snapshot of that tick), and
+  before the next batch starts the simulation waits until the loop has taken them and let the
+  tasks they woke take a step. So whatever the loop does *in reaction to the simulation* starts
+  at the next batch boundary, exactly as if the run had returned there: the same ticks,
+  however busy the loop (a test checks it bit for bit against one thread call per batch).
+- **batch ends** at which nothing happened: the new snapshot is published by reference (one
+  attribute store, atomic under the GIL; :attr:`SimWorld.snapshot` reads the newer of it and
+  the last one delivered with an event), and the next batch starts at once: no post, no
+  wake-up of the loop, no waiting. Readers on the loop see the newest snapshot there is.
+
+What this saves (see docs/benchmarks.md, section Simulation): the loop's
+wake-up per batch and the simulation's wait for it (each as much wall time as the physics of
+a batch of a small scene on a busy machine), while the loop still
+reacts to the simulation in lock-step. The loop does not step with the simulation
+between events: a task that polls the snapshot (rather than awaiting an event or an alarm)
+sees the simulation go on in steps of whatever it ran meanwhile, as it would in real time.
+
+Failure: a diverged state (or any error inside a batch) stops the world; every waiting and
+later command fails with that error.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import threading
+import time
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from functools import partial
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
+
+import anyio
+import anyio.abc
+import anyio.from_thread
+import anyio.to_thread
+from msgspec import Meta, Struct
+
+from device_drivers import (
+    DeviceError,
+    DeviceKey,
+    DeviceUnavailableError,
+    ProgressCallback,
+    WorldPose,
+)
+from device_drivers.protocol import Command, Stop
+from mujoco_sim._loop_post import LoopPost, loop_post
+from mujoco_sim._pacing import FastPacing, Pacing, RealTimePacing
+from mujoco_sim._plant import Batch, DeviceKind, Plant
+from mujoco_sim._robot_ik import WorldIK
+from mujoco_sim._runner_state import LoopState, ThreadState
+from mujoco_sim._snapshot import Snapshot, object_in
+from mujoco_sim.control._grasp import GraspMode
+from mujoco_sim.control._job import Job
+from mujoco_sim.ik._core import IKResult
+from scenario import Scenario
+
+if TYPE_CHECKING:
+    from mujoco_sim.recording._recorder import Recorder
+
+__all__ = ["SimWorld", "WorldOptions", "WorldStatistics", "running_world"]
+
+T = TypeVar("T")
+_log = logging.getLogger(__name__)
+_HALT_WAIT = 2.0  # wall seconds a cancelled motion waits for its halt
+_ACK_WAIT = 5.0  # wall seconds the simulation thread waits for the loop to take finished jobs
+
+
+class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    fast: bool = False
+    """As fast as possible instead of real time."""
+    control_rate: Annotated[float, Meta(ge=10, le=500)] = 100.0
+    batch: Annotated[float, Meta(gt=0, le=1)] = 0.05
+    """Largest simulated time per batch in real time, s (it runs what is due, up to this)."""
+    fast_batch: Annotated[float, Meta(gt=0, le=1)] = 0.1
+    """Simulated time per batch in fast mode, s: longer batches, fewer thread hand-offs."""
+    fast_handover: Annotated[float, Meta(ge=0, le=1)] = 0.02
+    """Fast mode: longest wall time, s, of one thread call running batches back to back (see
+    the module doc); 0: one batch per call, finished jobs handed over at its end."""
+    slip: Annotated[float, Meta(gt=0)] = 0.25
+    grasp: GraspMode = "weld"
+    seed: int = 0
+    max_acceleration: Annotated[float, Meta(gt=0)] = 1e6
+
+
+class WorldStatistics(Struct, frozen=True):
+    sim_time: float
+    wall_time: float
+    real_time_factor: float
+    batches: int
+    ticks: int
+    slips: int
+    busy: float
+    """Wall seconds spent inside batches."""
+    handovers: int = 0
+    """Thread calls back to the loop (in fast mode one runs many batches: see the module doc)."""
+
+
+class SimWorld:
+    """See the module doc. Build with :meth:`create` (or :func:`running_world`), start with
+    :meth:`run` in a task group."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        options: WorldOptions | None = None,
+        recorder: Recorder | None = None,
+    ) -> None:
+        """Blocking (builds and compiles the model and the IK solvers): call it
+        through :meth:`create` from async code."""
+        self.options = options or WorldOptions()
+        self.scenario = scenario
+        o = self.options
+        self.plant = Plant(
+            scenario,
+            control_rate=o.control_rate,
+            grasp=o.grasp,
+            seed=o.seed,
+            max_acceleration=o.max_acceleration,
+            recorder=recorder,
+        )
+        self.recorder = recorder
+        self.facts = self.plant.facts
+        self._limiter = anyio.CapacityLimiter(1)
+        self._on_loop = LoopState(self.plant.snapshot)
+        self._in_thread = ThreadState(self.plant.snapshot)
+        self._loop: asyncio.AbstractEventLoop | None = None  # fast runs on asyncio only
+        self._post: LoopPost | None = None  # how _report hands over (see loop_post)
+        self._ik = WorldIK(scenario)
+        if recorder is not None:  # still in the constructing thread: nothing steps yet
+            cameras = [
+                f"{c.mount}/{c.site}" if c.mount else c.label
+                for c in scenario.sensors
+                if c.kind == "camera"
+            ]
+            recorder.start(
+                self.plant.model, self.plant.data, cameras=cameras, robots=self.plant.series()
+            )
+
+    @classmethod
+    async def create(
+        cls,
+        scenario: Scenario,
+        options: WorldOptions | None = None,
+        recorder: Recorder | None = None,
+    ) -> SimWorld:
+        """Build the world in a worker thread (the loop keeps running)."""
+        return await anyio.to_thread.run_sync(cls, scenario, options, recorder)
+
+    # ------------------------------------------------------------------ the runner
+    async def run(
+        self, *, task_status: anyio.abc.TaskStatus[None] = anyio.TASK_STATUS_IGNORED
+    ) -> None:
+        """Step until cancelled or failed (see module doc). Returns after a failure, with every
+        waiting command failed; never raises it (read :attr:`failure`)."""
+        o, plant = self.options, self.plant
+        max_ticks = max(1, round((o.fast_batch if o.fast else o.batch) / plant.tick_time))
+        self._on_loop.wall0 = wall0 = time.perf_counter()
+        pacing: Pacing = (
+            FastPacing(max_ticks)
+            if o.fast
+            else RealTimePacing(
+                plant,
+                self._on_loop,
+                lambda: self.snapshot.time,
+                max_ticks=max_ticks,
+                slip=o.slip,
+                wall0=wall0,
+            )
+        )
+        run = self._batch_runner()
+        task_status.started()
+        try:
+            while self._on_loop.failure is None:
+                ticks, take_jobs = await pacing.next_batch()
+                inbox = self._on_loop.inbox
+                jobs = [inbox.popleft() for _ in range(len(inbox))] if take_jobs else []
+                started = time.perf_counter()
+                self._in_thread.acks.clear()  # the reactions to those came in at the checkpoint
+                self._in_thread.woken.clear()  # _complete rang them
+                self._in_thread.batch_ticks = self._in_thread.ticks_left = ticks
+                try:
+                    batch = await anyio.to_thread.run_sync(run, ticks, jobs, limiter=self._limiter)
+                except Exception as exc:  # divergence, or a bug in a controller
+                    self._take_posts()
+                    _log.error("simulation stopped: %s", exc)
+                    self._fail(exc, jobs)
+                    return
+                self._take_posts()
+                self._on_loop.busy += time.perf_counter() - started
+                self._complete(batch)
+        finally:
+            self._take_posts()
+            if self._post is not None:
+                self._post.close()
+                self._post = None
+            if self._on_loop.failure is None:
+                self._fail(DeviceUnavailableError("the simulation was stopped"), [])
+
+    def _batch_runner(self) -> Callable[[int, list[Job]], Batch]:
+        """What one thread call runs: one batch, or in fast mode with a ``fast_handover`` a
+        fast run of batches back to back (see module doc). Finished jobs and due alarms are
+        posted to the loop during a fast run on asyncio only; on another backend they end
+        the run."""
+        o, plant = self.options, self.plant
+        if not (o.fast and o.fast_handover > 0):
+            return plant.run_batch
+        report = None
+        with contextlib.suppress(RuntimeError):  # no asyncio loop: another backend
+            self._loop, report = asyncio.get_running_loop(), self._report
+            self._post = loop_post(self._loop)
+        return partial(
+            plant.run_batch,
+            inbox=self._on_loop.inbox,
+            until=self._between_batches,
+            budget=o.fast_handover,
+            report=report,
+            wake=self._wake,
+        )
+
+    def _tell(self) -> None:
+        """Loop: something a quiet world in real time must not sleep through happened."""
+        self._on_loop.news.set()
+
+    def _between_batches(self, sim_time: float) -> bool:
+        """Simulation thread, between the batches of a fast run: wait until the loop has
+        dealt with what was reported during the last batch, then say whether the run must
+        return (a job reports progress, a :meth:`call` waits, the world is being stopped;
+        an alarm is due, unless reported: see :meth:`_wake`)."""
+        for ack in self._in_thread.acks:
+            if not ack.wait(_ACK_WAIT):
+                _log.warning("the event loop took over %g s to take a batch", _ACK_WAIT)
+        self._in_thread.acks.clear()
+        try:
+            anyio.from_thread.check_cancelled()  # the world is being stopped: return now
+        except BaseException as exc:  # the backend's cancellation exception
+            if isinstance(exc, Exception):
+                raise
+            return True
+        due = self._loop is None and sim_time >= self._on_loop.next_alarm
+        if due or self._on_loop.reporting > 0 or self._on_loop.calls > 0:
+            return True
+        self._in_thread.ticks_left = (
+            self._in_thread.batch_ticks
+        )  # another batch of as many ticks follows
+        return False
+
+    def _wake(self, sim_time: float) -> bool:
+        """Simulation thread, after each tick of a fast run: whether an alarm not yet reported
+        is due (then the plant reports, and :meth:`_deliver` rings it). Not after the last
+        tick of a batch: the batch's own report, with its snapshot of that very tick, comes
+        next and rings it (a second state check, snapshot and post for the same tick would be
+        wasted; sleeps that start at a batch boundary end at one)."""
+        self._in_thread.ticks_left -= 1
+        if sim_time < self._on_loop.next_alarm or self._in_thread.ticks_left <= 0:
+            return False
+        due = [
+            a[1]
+            for a in list(self._on_loop.alarms)
+            if a[0] <= sim_time and a[1] not in self._in_thread.woken
+        ]
+        self._in_thread.woken.update(due)
+        return bool(due)
+
+    def _report(self, finished: list[Job], snapshot: Snapshot) -> None:
+        """Simulation thread: hand ``finished`` jobs or a due alarm to the loop now, with
+        ``snapshot``; the next batch starts once the loop has taken it and let the tasks it woke
+        take a step. The end of a batch at which neither happened is only published (see
+        module doc)."""
+        if not finished and snapshot.time < self._on_loop.next_alarm:
+            self._in_thread.latest = snapshot
+            return
+        assert self._loop is not None
+        ack = threading.Event()
+        self._in_thread.acks.append(ack)
+        if self._post is not None:
+            self._post.post(self._deliver, finished, snapshot, ack)
+        else:
+            self._loop.call_soon_threadsafe(self._deliver, finished, snapshot, ack)
+
+    def _take_posts(self) -> None:
+        """Loop, once a thread call has returned: deliver what it posted and the loop has not
+        taken yet, before what follows (as ``call_soon_threadsafe`` posts would be)."""
+        if self._post is not None:
+            self._post.run_pending()
+
+    def _deliver(self, finished: list[Job], snapshot: Snapshot, ack: threading.Event) -> None:
+        """Loop: wake the waiters of ``finished``; ``ack`` once they have taken a step (the
+        callbacks ``call_soon`` queued before it have run, as after a checkpoint)."""
+        if snapshot.time >= self._on_loop.snapshot.time:  # (posts are taken in order: always)
+            self._on_loop.snapshot = snapshot
+        for job in finished:
+            self._forget(job)
+            job.done.set()
+        self._ring(snapshot.time)
+        assert self._loop is not None
+        self._loop.call_soon(ack.set)
+
+    def _ring(self, sim_time: float) -> None:
+        """Wake the :meth:`wait_time` alarms due at ``sim_time``."""
+        if self._on_loop.alarms:
+            due = [a for a in self._on_loop.alarms if a[0] <= sim_time]
+            for alarm in due:
+                self._on_loop.alarms.remove(alarm)
+                alarm[1].set()
+            self._on_loop.next_alarm = min((a[0] for a in self._on_loop.alarms), default=math.inf)
+
+    def _complete(self, batch: Batch) -> None:
+        self._on_loop.snapshot = batch.snapshot
+        self._on_loop.handovers += 1
+        for job in batch.finished:
+            self._forget(job)
+            job.done.set()
+        self._ring(batch.snapshot.time)
+        for job in self._on_loop.waiting:
+            if job.on_progress is not None and job.progress != job.reported:
+                job.reported = job.progress
+                job.on_progress(job.progress)
+
+    def _forget(self, job: Job) -> None:
+        if job in self._on_loop.waiting:
+            self._on_loop.waiting.discard(job)
+            if job.on_progress is not None:
+                self._on_loop.reporting -= 1
+
+    def _fail(self, error: BaseException, started: list[Job]) -> None:
+        self._on_loop.failure = error
+        for job in [*self._on_loop.waiting, *started, *self._on_loop.inbox]:
+            if not job.finished:
+                job.finish(error=error)
+            job.done.set()
+        self._on_loop.waiting.clear()
+        self._on_loop.reporting = 0
+        self._on_loop.inbox.clear()
+        for _, alarm in self._on_loop.alarms:
+            alarm.set()
+        self._on_loop.stopped.set()
+
+    @property
+    def failure(self) -> BaseException | None:
+        """Why the world stopped (``None`` while it runs)."""
+        return self._on_loop.failure
+
+    async def wait_stopped(self) -> BaseException | None:
+        """Wait until the world stops; return why."""
+        await self._on_loop.stopped.wait()
+        return self._on_loop.failure
+
+    async def wait_time(self, sim_time: float) -> None:
+        """Wait until the simulation clock reaches ``sim_time`` s (or the world stops)."""
+        if self.snapshot.time >= sim_time or self._on_loop.failure is not None:
+            return
+        alarm = anyio.Event()
+        self._on_loop.alarms.append((sim_time, alarm))
+        self._on_loop.next_alarm = min(self._on_loop.next_alarm, sim_time)
+        self._tell()
+        await alarm.wait()
+
+    async def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` of simulated time."""
+        await self.wait_time(self.snapshot.time + seconds)
+
+    # ------------------------------------------------------------------ commands
+    async def execute(
+        self, device: DeviceKey, command: Command, progress: ProgressCallback | None = None
+    ) -> Any:
+        """Queue ``command`` for ``device`` and wait for its outcome. Cancelling the caller
+        halts the device (it holds where it is) before the cancellation propagates."""
+        if device not in self.plant.controllers:
+            raise DeviceUnavailableError(f"no device {device[0]}/{device[1]} in this world")
+        if self._on_loop.failure is not None:
+            raise self._on_loop.failure
+        job = Job(device, command, progress)
+        self._on_loop.waiting.add(job)
+        if progress is not None:
+            self._on_loop.reporting += 1
+        self._on_loop.inbox.append(job)
+        self._tell()
+        try:
+            await job.done.wait()
+        except anyio.get_cancelled_exc_class():
+            job.cancelled = True
+            with anyio.CancelScope(shield=True), anyio.move_on_after(_HALT_WAIT):
+                await self.halt(device)
+            raise
+        if job.error is not None:
+            raise job.error
+        if progress is not None and job.reported < 1.0:
+            progress(1.0)
+        return job.result
+
+    async def halt(self, device: DeviceKey) -> None:
+        """Stop ``device`` and wait until it holds still (quietly if the world has stopped)."""
+        if self._on_loop.failure is not None:
+            return
+        try:
+            await self.execute(device, Stop())
+        except DeviceError:
+            if self._on_loop.failure is None:
+                raise
+
+    def state(self, device: DeviceKey) -> Any:
+        """The device's state in the latest snapshot."""
+        try:
+            return self.snapshot.states[device]
+        except KeyError:
+            raise DeviceUnavailableError(
+                f"no device {device[0]}/{device[1]} with a state"
+            ) from None
+
+    @property
+    def snapshot(self) -> Snapshot:
+        """The newest state of the world: the last batch end's, or the last one delivered with
+        an event if that is newer (see module doc). Immutable: read it once per decision."""
+        latest, delivered = self._in_thread.latest, self._on_loop.snapshot
+        return latest if latest.time > delivered.time else delivered
+
+    @property
+    def devices(self) -> dict[DeviceKey, DeviceKind]:
+        return dict(self.plant.kinds)
+
+    def label(self, device: DeviceKey) -> str:
+        return self.plant.controllers[device].label
+
+    async def call(self, fn: Callable[[Any, Any], T]) -> T:
+        """Run ``fn(model, data)`` in the simulation thread, between batches (a fast run
+        returns at the next batch boundary for it)."""
+        plant = self.plant
+        self._on_loop.calls += 1
+        self._tell()
+        try:
+            return await anyio.to_thread.run_sync(
+                fn, plant.model, plant.data, limiter=self._limiter
+            )
+        finally:
+            self._on_loop.calls -= 1
+
+    # ------------------------------------------------------------------ IK
+    async def solve_ik(self, robot: str, target: WorldPose, *, whole_body: bool) -> IKResult:
+        """Joint values putting ``robot``'s tool at ``target`` from its present set-points
+        (:class:`~mujoco_sim.WorldIK`: placo, then DLS, on an IK thread).
+
+        Raises:
+            UnreachableError: neither solver converged (the smaller residual is reported).
+        """
+        arm = self.plant.controllers[(robot, "arm")]
+        base = self.plant.controllers[(robot, "base")]
+        q0 = {**self._setpoints(base), **self._setpoints(arm)}
+        return await self._ik.solve(robot, q0, target, whole_body=whole_body)
+
+    def _setpoints(self, ctrl: Any) -> dict[str, float]:
+        values = self.snapshot.ctrl[ctrl.acts]  # a copy taken in the simulation thread
+        return {j: float(v) for j, v in zip(ctrl.joints, values, strict=True)}
+
+    # ------------------------------------------------------------------ ground truth
+    def body_pose(self, name: str) -> WorldPose:
+        """World pose of a body (a label, or ``r1/gripper``) in the latest snapshot."""
+        return self.snapshot.pose(self.facts.body(name))
+
+    def object_in(self, label: str, container: str) -> bool:
+        """Whether ``label`` lies in ``container`` now, at rest and not held."""
+        return object_in(self.snapshot, self.facts, label, container)
+
+    def objects_in(self, container: str) -> list[str]:
+        return [o for o in self.facts.objects if o != container and self.object_in(o, container)]
+
+    async def contacts(self) -> list[tuple[str, str, float]]:
+        """Bodies in contact now, with normal forces (computed in the simulation thread)."""
+        return await self.call(lambda _model, _data: self.plant.contacts())
+
+    def statistics(self) -> WorldStatistics:
+        s = self._on_loop
+        wall = time.perf_counter() - s.wall0 if s.wall0 else 0.0
+        sim = self.snapshot.time
+        return WorldStatistics(
+            sim_time=sim,
+            wall_time=wall,
+            real_time_factor=sim / wall if wall > 0 else math.nan,
+            batches=self.plant.batches_run,  # counted in the simulation thread
+            ticks=self.plant.ticks_run,
+            slips=s.slips,
+            busy=s.busy,
+            handovers=s.handovers,
+        )
+
+
+@asynccontextmanager
+async def running_world(
+    scenario: Scenario, options: WorldOptions | None = None, recorder: Recorder | None = None
+) -> AsyncIterator[SimWorld]:
+    """Build ``scenario``'s world (in a worker thread) and step it while the block runs."""
+    world = await SimWorld.create(scenario, options, recorder)
+    async with anyio.create_task_group() as tg:
+        await tg.start(world.run)
+        try:
+            yield world
+        finally:
+            tg.cancel_scope.cancel()

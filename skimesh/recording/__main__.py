@@ -1,0 +1,5 @@
+import sys
+
+from ._inspect import main
+
+sys.exit(main())

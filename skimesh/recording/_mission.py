@@ -1,0 +1,257 @@
+"""The mission in rerun, next to the 3-D scene: task events, the plan, each robot's active skill
+and progress, and every world-model change.
+
+The world's :class:`~mujoco_sim.recording.Recorder` records the scene (geometry once, body
+poses and joints on the ``sim_time`` timeline); :class:`MissionRecording` logs into the *same*
+recording stream, so one ``.rrd`` holds everything. It lives at the application's edge: it
+only listens (task events handed to :meth:`task_event`, changes to :meth:`wm_change`, the
+agents' event-log entries to :meth:`agent_entry`) and never touches the world model's or the
+skills' code. Entities::
+
+    task/events              TextLog: one line per task event (replans WARN, failures ERROR)
+    task/plan                TextDocument (markdown): the plan's steps and partial order
+    task/plan/graph          GraphNodes + GraphEdges: steps, and "must finish first" edges
+    robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
+    robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
+    world_model/changes      TextLog: one line per committed transaction (revision + summary)
+    agents/<agent>/events    TextLog: the agent's event log: runs started, results, refused
+                             starts, world-model writes (:func:`record_agent_events`)
+    demo/log                 TextLog: the demo's own lines (start-up, verification, summary)
+
+Each entry is on two timelines: ``sim_time`` (simulated seconds, the scene's timeline) and
+``wall_time`` (seconds since the recording began). Rerun keeps the current time per thread:
+everything here is logged from the event loop's thread, the scene from the simulation thread.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Mapping
+
+import rerun as rr
+
+from skill_agent import WorldView
+from skill_agent.protocol import LogEntry, ParamSpec
+from task_agent.discovery import agents_from_view
+from task_agent.protocol import (
+    Planned,
+    Replanning,
+    StepFinished,
+    StepProgress,
+    StepStarted,
+    TaskEvent,
+    TaskFinished,
+    TaskStarted,
+)
+from wm_store.protocol import (
+    Change,
+    ClassDefined,
+    ElementPut,
+    ElementRemoved,
+    RelationAdded,
+    RelationRemoved,
+    TemplateDefined,
+    Value,
+)
+
+from ._agents import AgentEventLines
+
+__all__ = ["CallText", "MissionRecording", "describe_change", "step_text"]
+
+LabelOf = Callable[[str], str]
+_MAX_ITEMS = 6
+
+
+def step_text(skill: str, params: Mapping[str, Value], label_of: LabelOf) -> str:
+    """``pick(object=Gear-1, holder=PartBox-1)``: element ids shown as their labels."""
+    args = ", ".join(f"{k}={label_of(v) if isinstance(v, str) else v}" for k, v in params.items())
+    return f"{skill}({args})"
+
+
+class CallText:
+    """A skill call as people read it: ``pick(object=Gear-1, holder=PartBox-1, ...)`` with
+    labels for element ids, leaving out the hardware (the robot's own devices), parameters
+    left None and configuration parameters at their default. The skills' descriptions come
+    from the agents' registrations in the world model (read when first needed)."""
+
+    def __init__(self, view: WorldView, label_of: LabelOf) -> None:
+        self.view, self.label_of = view, label_of
+        self._specs: dict[tuple[str, str], dict[str, ParamSpec]] = {}
+
+    def _params(self, agent: str, skill: str) -> dict[str, ParamSpec]:
+        key = (agent, skill)
+        if key not in self._specs:
+            for info in agents_from_view(self.view, include_unavailable=True):
+                for desc in info.skills:
+                    self._specs[(info.name, desc.name)] = {p.name: p for p in desc.parameters}
+        return self._specs.get(key, {})
+
+    def __call__(self, agent: str, skill: str, params: Mapping[str, Value]) -> str:
+        specs = self._params(agent, skill)
+
+        def shown(name: str, value: Value) -> bool:
+            spec = specs.get(name)
+            if value is None or spec is None:
+                return value is not None
+            return spec.kind == "online" or (spec.kind == "offline" and value != spec.default)
+
+        return step_text(skill, {k: v for k, v in params.items() if shown(k, v)}, self.label_of)
+
+
+def describe_change(change: Change, label_of: LabelOf) -> str:
+    """One line for a committed transaction: revision, author and what it did (each delta
+    when there are a few, else counts)."""
+    items: list[str] = []
+    counts = {"put": 0, "removed": 0, "+rel": 0, "-rel": 0, "defined": 0}
+    for delta in change.deltas:
+        match delta:
+            case ElementPut(element=e):
+                counts["put"] += 1
+                items.append(f"put {e.label or e.id}")
+            case ElementRemoved(id=eid):
+                counts["removed"] += 1
+                items.append(f"removed {eid}")
+            case RelationAdded(relation=r) | RelationRemoved(relation=r):
+                sign = "+" if isinstance(delta, RelationAdded) else "-"
+                counts[f"{sign}rel"] += 1
+                items.append(f"{sign}{r.predicate}({label_of(r.subject)}, {label_of(r.object)})")
+            case ClassDefined() | TemplateDefined():
+                counts["defined"] += 1
+                items.append(type(delta).__name__)
+    items = list(dict.fromkeys(items))  # an element updated twice in one transaction: once
+    head = f"rev {change.revision} by {change.author or '?'}:"
+    if len(items) <= _MAX_ITEMS:
+        return f"{head} {', '.join(items) or 'no change'}"
+    what = ", ".join(f"{n} {k}" for k, n in counts.items() if n)
+    return f"{head} {len(change.deltas)} deltas ({what})"
+
+
+class MissionRecording:
+    """Logs the mission into ``rec`` (see the module doc). ``sim_clock`` reads the simulated
+    time; ``robots`` maps agent names to robot entity names (default: the agent's name)."""
+
+    def __init__(
+        self,
+        rec: rr.RecordingStream,
+        *,
+        sim_clock: Callable[[], float],
+        label_of: LabelOf,
+        call_text: Callable[[str, str, Mapping[str, Value]], str] | None = None,
+        robots: Mapping[str, str] | None = None,
+    ) -> None:
+        self.rec = rec
+        self.sim_clock = sim_clock
+        self.label_of = label_of
+        self.call_text = call_text or (lambda _agent, skill, p: step_text(skill, p, label_of))
+        self.robots = dict(robots or {})
+        self._t0 = time.monotonic()
+        self._steps: dict[int, str] = {}
+        self.agents = AgentEventLines(
+            rec,
+            sim_clock=sim_clock,
+            wall_clock=lambda: time.monotonic() - self._t0,
+            label_of=label_of,
+            call_text=self.call_text,
+        )
+        """The agents' event-log lines (batched: :meth:`AgentEventLines.flush` sends them)."""
+        for robot in sorted(set(self.robots.values())):
+            rec.log(f"robots/{robot}/progress", rr.SeriesLines(names=["progress"]), static=True)
+
+    def _now(self) -> None:
+        self.rec.set_time("sim_time", duration=self.sim_clock())
+        self.rec.set_time("wall_time", duration=time.monotonic() - self._t0)
+
+    def _robot(self, agent: str) -> str:
+        return self.robots.get(agent, agent)
+
+    def note(self, text: str, level: str = "INFO") -> None:
+        """A line of the demo's own (start-up, verification, summary)."""
+        self._now()
+        self.rec.log("demo/log", rr.TextLog(text, level=level))
+
+    def wm_change(self, change: Change) -> None:
+        """One world-model change (call it from the client's change callback)."""
+        self._now()
+        self.rec.log("world_model/changes", rr.TextLog(describe_change(change, self.label_of)))
+
+    def agent_entry(self, entry: LogEntry) -> None:
+        """One entry of an agent's event log (buffered; progress is left out)."""
+        self.agents.add(entry)
+
+    def task_event(self, event: TaskEvent) -> None:
+        """One task event: the task log, the plan, the robot's skill timeline."""
+        self._now()
+        level, text = "INFO", ""
+        match event:
+            case TaskStarted():
+                text = f"task {event.task_id} started: {event.goal or event.name}"
+            case Planned():
+                text = self._planned(event)
+            case StepStarted():
+                self._steps[event.step] = event.skill
+                call = self.call_text(event.agent, event.skill, event.params)
+                text = f"{event.agent}: step {event.step} {call} started"
+                self._skill(event.agent, f"step {event.step} {call} started", 0.0)
+            case StepProgress():
+                skill = self._steps.get(event.step, "")
+                message = f"step {event.step} {skill} [{event.state}] {event.message}".rstrip()
+                self._skill(event.agent, message, event.fraction if event.fraction >= 0 else None)
+                return  # progress goes to the robot's timeline only
+            case StepFinished():
+                ok = "succeeded" if event.success else f"FAILED ({event.reason}): {event.message}"
+                text = f"{event.agent}: step {event.step} {event.skill} {ok}"
+                level = "INFO" if event.success else "WARN"
+                self._skill(event.agent, f"step {event.step} {event.skill} {ok}", 1.0, level)
+            case Replanning():
+                text = f"replanning (attempt {event.attempt}): {event.reason}"
+                level = "WARN"
+            case TaskFinished():
+                text = (
+                    f"task {event.task_id} {event.outcome}: {event.steps_run} steps run, "
+                    f"{event.replans} replans, {event.duration:.1f} s; {event.message}"
+                ).rstrip("; ")
+                level = "INFO" if event.outcome == "succeeded" else "ERROR"
+        self.rec.log("task/events", rr.TextLog(text, level=level))
+
+    def _skill(self, agent: str, text: str, fraction: float | None, level: str = "INFO") -> None:
+        robot = self._robot(agent)
+        self.rec.log(f"robots/{robot}/skill", rr.TextLog(text, level=level))
+        if fraction is not None:
+            self.rec.log(f"robots/{robot}/progress", rr.Scalars([fraction]))
+
+    def _planned(self, event: Planned) -> str:
+        lines = [
+            f"# Plan {event.attempt} ({event.planner}, {event.plan_seconds:.2f} s)",
+            "",
+            f"{len(event.steps)} steps; estimated makespan {event.makespan:.1f} s "
+            f"(sequential {event.sequential:.1f} s)",
+            "",
+            "| step | agent | skill | after | start | finish |",
+            "|---|---|---|---|---|---|",
+        ]
+        nodes, labels = [], []
+        edges: list[tuple[str, str]] = []
+        for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
+            call = self.call_text(s.agent, s.skill, s.params)
+            after = ", ".join(map(str, s.after)) or "-"
+            lines.append(
+                f"| {s.index} | {s.agent} | `{call}` | {after} | {s.start:.1f} | {s.finish:.1f} |"
+            )
+            nodes.append(str(s.index))
+            labels.append(f"{s.index} {s.agent}: {s.skill}")
+            edges += [(str(before), str(s.index)) for before in s.after]
+        self.rec.log("task/plan", rr.TextDocument("\n".join(lines), media_type="text/markdown"))
+        if nodes:
+            self.rec.log("task/plan/graph", rr.GraphNodes(nodes, labels=labels))
+            self.rec.log("task/plan/graph", rr.GraphEdges(edges, graph_type="directed"))
+        return (
+            f"plan {event.attempt}: {len(event.steps)} steps, estimated makespan "
+            f"{event.makespan:.1f} s (sequential {event.sequential:.1f} s), planned in "
+            f"{event.plan_seconds:.2f} s"
+        )
+
+    def entities(self) -> Iterable[str]:
+        """The entity paths this class writes (for checks)."""
+        fixed = ["task/events", "task/plan", "world_model/changes", "demo/log"]
+        per_robot = [f"robots/{r}/{k}" for r in self.robots.values() for k in ("skill", "progress")]
+        return [*fixed, *per_robot, *self.agents.entities()]

@@ -1,0 +1,304 @@
+"""One task from start to finish: :class:`Executor`.
+
+A **goal** is planned from the current world model with the agents discovery offers, the plan
+becomes a partial order (:func:`~task_agent.planning.to_partial_order`) and its steps run
+as soon as their predecessors are done (:class:`~task_agent.execution.StepScheduler`: steps on
+different robots in parallel). When a step fails (a pre-, post- or hold-condition, a skill
+error, a time-out, the agent's liveliness token gone) the failed branch is stopped, the other
+in-flight steps finish, and the goal is **planned again from the world model as it is now**
+with the agents still there, at most ``TaskOptions.max_replans`` times; an agent's skill that
+failed on its own (``execution``, ``error``, ``timeout``) is left out of later plans of the task
+unless no plan exists without it. When every step succeeded the goal is checked in the world
+model: if it does not hold, that is a failure too. Each reason is published in a
+``Replanning`` event and listed in the final message.
+
+A **task file** (hand-written sequence / parallel blocks, verified by the service before it gets
+here) runs as written; a failed step fails the task (there is no goal to plan towards), unless
+the operator takes the step over (semi-autonomy, see ``_steps``).
+
+Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
+``StepProgress`` / ``StepFinished``, ``Replanning``, one ``TaskFinished``.
+:meth:`Executor.abort` stops every run of the task (each agent brings its robot to a safe
+state) and ends it ``aborted``; so does cancelling the executor (the service shutting down).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Awaitable, Callable, Sequence
+from typing import Protocol
+
+import anyio
+import msgspec
+
+from skill_agent import WorldView
+
+from .._errors import DomainError, PlanningError, UnsolvableError
+from .._goals import Goal
+from ..discovery import AgentInfo, Discovery
+from ..planning import Plan, to_partial_order
+from ..protocol import (
+    Planned,
+    Replanning,
+    TaskEvent,
+    TaskFile,
+    TaskFinished,
+    TaskInfo,
+    TaskOptions,
+    TaskOutcome,
+    TaskStarted,
+)
+from ._run_writes import RunWrites
+from ._runners import SkillRunner
+from ._state import (
+    StepSpec,
+    WorldModel,
+    schedule,
+    steps_from_file,
+    steps_from_plan,
+    unmet_goal,
+)
+from ._steps import EventSink, StepOutcome, StepScheduler
+
+__all__ = ["EXCLUDED_REASONS", "Executor", "PlanSource"]
+
+_log = logging.getLogger(__name__)
+
+EXCLUDED_REASONS = frozenset({"execution", "error", "timeout"})
+"""Failures that say the agent's skill itself failed (not the world model): that skill of
+that agent is left out of the task's later plans."""
+
+
+class PlanSource(Protocol):
+    """What the executor needs of :class:`~task_agent.planning.Planner`."""
+
+    @property
+    def engine(self) -> str: ...
+
+    async def plan(self, agents: Sequence[AgentInfo], view: WorldView, goal: Goal) -> Plan: ...
+
+
+class Executor:
+    """Runs one task (see the module docstring). Call :meth:`run_goal` or :meth:`run_file`
+    once; :meth:`abort` and :meth:`info` from anywhere on the loop."""
+
+    def __init__(
+        self,
+        *,
+        task_id: str,
+        wm: WorldModel,
+        discovery: Discovery,
+        runner: SkillRunner,
+        publish: Callable[[TaskEvent], None],
+        options: TaskOptions | None = None,
+        planner: PlanSource | None = None,
+        operator_agent: str = "operator",
+        wm_timeout: float = 5.0,
+        agent_wait: float = 5.0,
+        writes: RunWrites | None = None,
+    ) -> None:
+        self.task_id = task_id
+        self.wm = wm
+        self.discovery = discovery
+        self.options = options or TaskOptions()
+        self.planner = planner
+        self.wm_timeout = wm_timeout
+        self.agent_wait = agent_wait
+        """Seconds to wait for an agent when none is available (a router restart makes every
+        liveliness token vanish for a few seconds)."""
+        self.events = EventSink(task_id, publish)
+        self.steps = StepScheduler(
+            events=self.events,
+            runner=runner,
+            discovery=discovery,
+            wm=wm,
+            options=self.options,
+            operator_agent=operator_agent,
+            writes=writes,
+        )
+        self.goal = ""
+        self.name = ""
+        self.outcome: TaskOutcome = "running"
+        self.message = ""
+        self.reasons: list[str] = []
+        """Why each replan happened."""
+        self.started_at = time.time()
+        self.finished_at = 0.0
+        self._scope = anyio.CancelScope()
+        self._abort_reason = ""
+        self._next_step = 0
+
+    # ------------------------------------------------------------------ public
+
+    @property
+    def replans(self) -> int:
+        return len(self.reasons)
+
+    def abort(self, reason: str = "") -> None:
+        """Stop every run of the task and end it ``aborted`` (returns at once)."""
+        if self.outcome == "running" and not self._abort_reason:
+            self._abort_reason = reason or "aborted on request"
+            self._scope.cancel()
+
+    def info(self) -> TaskInfo:
+        return TaskInfo(
+            task_id=self.task_id,
+            outcome=self.outcome,
+            goal=self.goal,
+            name=self.name,
+            started_at=self.started_at,
+            finished_at=self.finished_at,
+            replans=self.replans,
+            steps_run=self.steps.steps_run,
+            message=self.message,
+        )
+
+    async def run_goal(self, goal: Goal) -> TaskFinished:
+        """Plan and run until ``goal`` holds (or fails, is unsolvable or aborted)."""
+        self.goal = str(goal)
+        return await self._run(lambda: self._pursue(goal))
+
+    async def run_file(self, task_file: TaskFile) -> TaskFinished:
+        """Run a (verified) task file as written."""
+        self.name = task_file.name
+        return await self._run(lambda: self._follow(task_file))
+
+    # ------------------------------------------------------------------ the task
+
+    async def _run(self, body: Callable[[], Awaitable[tuple[TaskOutcome, str]]]) -> TaskFinished:
+        self.started_at = time.time()
+        self.events.emit(TaskStarted, goal=self.goal, name=self.name)
+        outcome: TaskOutcome = "failed"
+        try:
+            with self._scope:
+                outcome, message = await body()
+        except anyio.get_cancelled_exc_class():
+            self._finish("aborted", "the task agent stopped")
+            raise
+        except Exception as e:  # a bug must not leave the task "running" forever
+            _log.exception("task %s failed unexpectedly", self.task_id)
+            message = f"internal error: {type(e).__name__}: {e}"
+        if self._scope.cancelled_caught:
+            outcome, message = "aborted", self._abort_reason
+        return self._finish(outcome, message)
+
+    def _finish(self, outcome: TaskOutcome, message: str) -> TaskFinished:
+        self.outcome, self.finished_at = outcome, time.time()
+        if self.reasons:
+            listed = "; ".join(f"{i + 1}. {r}" for i, r in enumerate(self.reasons))
+            message += f" [{self.replans} replan{'s' * (self.replans > 1)}: {listed}]"
+        self.message = message
+        return self.events.emit(
+            TaskFinished,
+            outcome=outcome,
+            message=message,
+            steps_run=self.steps.steps_run,
+            replans=self.replans,
+            duration=self.finished_at - self.started_at,
+        )
+
+    async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
+        if self.planner is None:
+            return "failed", "this executor has no planner: it can only run task files"
+        excluded: set[tuple[str, str]] = set()
+        attempt = 0
+        while True:
+            try:
+                steps = await self._plan(goal, attempt, excluded)
+            except (UnsolvableError, DomainError) as e:
+                if attempt == 0:
+                    return "unsolvable", str(e)
+                return "failed", f"replanning found no plan: {e}"
+            except PlanningError as e:
+                return "failed", f"planning failed: {e}"
+            failure = await self.steps.run(steps)
+            if failure is None:
+                await self._catch_up()
+                unmet = unmet_goal(goal, self.wm)
+                if not unmet:
+                    return "succeeded", f"the goal holds: {self.steps.steps_run} steps run"
+                reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
+            else:
+                reason = str(failure)
+                if failure.reason in EXCLUDED_REASONS:
+                    excluded.add((failure.agent, failure.skill))
+            if attempt >= self.options.max_replans:
+                return "failed", f"{reason} (no replan left of {self.options.max_replans})"
+            attempt += 1
+            self.reasons.append(reason)
+            self.events.emit(Replanning, attempt=attempt, reason=reason)
+
+    async def _plan(
+        self, goal: Goal, attempt: int, excluded: set[tuple[str, str]]
+    ) -> list[StepSpec]:
+        assert self.planner is not None
+        await self._catch_up()
+        with anyio.move_on_after(self.agent_wait):
+            while not self.discovery.agents():
+                await self.discovery.wait_changed()
+        started = time.perf_counter()
+        try:
+            plan = await self.planner.plan(self._agents(excluded), self.wm, goal)
+        except UnsolvableError:
+            if not excluded:
+                raise
+            _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
+            plan = await self.planner.plan(self._agents(set()), self.wm, goal)
+        order = await anyio.to_thread.run_sync(to_partial_order, plan)
+        seconds = time.perf_counter() - started
+        steps = self._number(steps_from_plan(order, self._next_step))
+        self.events.emit(
+            Planned,
+            steps=[s.planned() for s in steps],
+            attempt=attempt,
+            planner=self.planner.engine,
+            plan_seconds=seconds,
+            makespan=order.makespan,
+            sequential=order.sequential,
+        )
+        return steps
+
+    def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
+        agents = self.discovery.agents()
+        return [
+            msgspec.structs.replace(
+                a, skills=tuple(s for s in a.skills if (a.name, s.name) not in excluded)
+            )
+            for a in agents
+        ]
+
+    def _number(self, steps: list[StepSpec]) -> list[StepSpec]:
+        self._next_step += len(steps)
+        return steps
+
+    async def _follow(self, task_file: TaskFile) -> tuple[TaskOutcome, str]:
+        durations = {
+            s.name: s.duration
+            for a in self.discovery.agents(include_unavailable=True)
+            for s in a.skills
+        }
+        steps = self._number(schedule(steps_from_file(task_file), durations))
+        self.events.emit(
+            Planned,
+            steps=[s.planned() for s in steps],
+            planner="task file",
+            makespan=max((s.finish for s in steps), default=0.0),
+            sequential=sum(s.finish - s.start for s in steps),
+        )
+        failure: StepOutcome | None = await self.steps.run(steps)
+        if failure is not None:
+            return "failed", str(failure)
+        return "succeeded", f"every step succeeded: {self.steps.steps_run} steps run"
+
+    async def _catch_up(self) -> None:
+        """Wait until the replica shows the effects of every finished step."""
+        try:
+            await self.wm.wait_for_revision(self.steps.effects_revision, timeout=self.wm_timeout)
+        except TimeoutError:
+            _log.warning(
+                "task %s: the world model did not reach revision %d within %g s",
+                self.task_id,
+                self.steps.effects_revision,
+                self.wm_timeout,
+            )

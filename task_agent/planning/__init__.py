@@ -1,0 +1,55 @@
+"""Planning: solving a :class:`~task_agent.domain.PlanningTask` through unified-planning, and
+the plan as a partial order the robots can run in parallel.
+
+:class:`Planner` solves a task with Kairos (default, in-process) or Fast Downward
+(``engine="fast-downward"``, a child process per call), within a time-out, and returns a
+:class:`Plan` of agent-tagged :class:`PlanStep` values (with :class:`PlanStats`). A goal without
+a plan raises :class:`~task_agent.UnsolvableError` with the goal facts that can never hold and
+why; running out of time :class:`~task_agent.PlannerTimeoutError`; any other engine failure
+:class:`~task_agent.PlanningError` with the engine's log.
+
+:func:`to_partial_order` relaxes the plan's sequence into a :class:`PartialOrderPlan`: the
+:class:`Edge` values that must stay ordered (causal links, threats, conflicts, shared
+hardware), a schedule of :class:`ScheduledStep` values and, with ``balance=True``, steps moved
+between interchangeable robots to shorten the makespan.
+
+This sub-package is the task layer's only contact with planner libraries: importing it imports
+unified-planning (see docs/benchmarks.md, Planning). The code: ``_plan`` (:class:`Plan` and its
+steps, pure data), ``_convert`` (task to unified-planning problem, engine plan to steps),
+``_engines`` (Kairos and Fast Downward), ``_planner`` (:class:`Planner`: environments,
+compression, fallback, errors) and ``_partial_order``.
+"""
+
+from ._convert import to_unified_planning as to_unified_planning
+from ._convert import to_up_plan as to_up_plan
+from ._engines import FD_SEARCH as FD_SEARCH
+from ._partial_order import Edge as Edge
+from ._partial_order import EdgeReason as EdgeReason
+from ._partial_order import PartialOrderPlan as PartialOrderPlan
+from ._partial_order import ScheduledStep as ScheduledStep
+from ._partial_order import to_partial_order as to_partial_order
+from ._plan import Engine as Engine
+from ._plan import Plan as Plan
+from ._plan import PlanStats as PlanStats
+from ._plan import PlanStep as PlanStep
+from ._planner import COMPRESS_BELOW as COMPRESS_BELOW
+from ._planner import ENVIRONMENT_SOLVES as ENVIRONMENT_SOLVES
+from ._planner import Planner as Planner
+
+__all__ = [
+    "COMPRESS_BELOW",
+    "ENVIRONMENT_SOLVES",
+    "FD_SEARCH",
+    "Edge",
+    "EdgeReason",
+    "Engine",
+    "PartialOrderPlan",
+    "Plan",
+    "PlanStats",
+    "PlanStep",
+    "Planner",
+    "ScheduledStep",
+    "to_partial_order",
+    "to_unified_planning",
+    "to_up_plan",
+]

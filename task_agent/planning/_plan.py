@@ -1,0 +1,75 @@
+"""What planning answers: a :class:`Plan` of agent-tagged :class:`PlanStep` values, with
+:class:`PlanStats` on how it was found.
+
+:class:`~task_agent.planning.Planner` makes them; the executor runs the steps (a step names the
+agent, its skill and the skill's parameters) and the partial order relaxes their sequence.
+Pure data, no planner imports.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import msgspec
+
+from ..domain import PlanningTask
+from ..reachability import GroundStep
+
+__all__ = ["Engine", "Plan", "PlanStats", "PlanStep"]
+
+Engine = Literal["kairos", "fast-downward"]
+"""The planning engines a :class:`~task_agent.planning.Planner` can use."""
+
+
+class PlanStep(msgspec.Struct, frozen=True, kw_only=True):
+    """One skill run: who, what, with which parameters (skill parameter -> element id,
+    hardware included; parameters left out are inferred by the agent)."""
+
+    index: int
+    action: str
+    agent: str
+    skill: str
+    args: tuple[str, ...]
+    """The action's arguments, in the order of its parameters."""
+    params: dict[str, str]
+    duration: float
+
+    @property
+    def ground(self) -> GroundStep:
+        return GroundStep(self.action, self.args)
+
+    def __str__(self) -> str:
+        args = ", ".join(f"{k}={v}" for k, v in self.params.items())
+        return f"{self.agent}: {self.skill}({args})"
+
+
+class PlanStats(msgspec.Struct, frozen=True, kw_only=True):
+    engine: str
+    objects: int
+    """Objects of the full task."""
+    objects_solved: int
+    """Objects of the task the engine solved (fewer when compression applied)."""
+    fallback: bool = False
+    """The compressed task failed and the full task was solved."""
+    convert_s: float = 0.0
+    """Building the unified-planning problem."""
+    solve_s: float = 0.0
+    """The engine call through unified-planning (PDDL writing, parsing, search)."""
+    engine_s: float = math.nan
+    """The engine's own figure for its work, when it reports one."""
+    total_s: float = 0.0
+
+
+class Plan(msgspec.Struct, frozen=True, kw_only=True):
+    steps: tuple[PlanStep, ...]
+    task: PlanningTask
+    stats: PlanStats
+
+    @property
+    def duration(self) -> float:
+        """Estimated seconds when the steps run one after the other."""
+        return sum(s.duration for s in self.steps)
+
+    def __str__(self) -> str:
+        return "\n".join(f"{s.index + 1:3d}. {s}" for s in self.steps) or "(empty plan)"

@@ -1,0 +1,239 @@
+"""The planner: :class:`Planner` solves a :class:`~task_agent.domain.PlanningTask` through
+unified-planning and returns a :class:`~task_agent.planning.Plan`.
+
+``solve`` is the blocking core; ``async plan`` builds the task on the caller's loop (it reads
+the world-model replica, which only the loop may touch) and solves in a worker thread through
+``anyio.to_thread.run_sync`` with the planner's capacity limiter (one solve at a time by
+default).
+
+Before solving, the task is compressed to the objects the goal can touch
+(:func:`~task_agent.reachability.relevant_objects`), unless the goal itself names most objects
+(:data:`COMPRESS_BELOW`); the plan is replayed on the full task and, if that fails or the small
+task has no plan, the full task is solved. A goal without a plan
+raises :class:`~task_agent.UnsolvableError` with the goal facts that can never hold
+and why (:func:`~task_agent.reachability.diagnose`); running out of time raises
+:class:`~task_agent.PlannerTimeoutError`; any other engine failure
+:class:`~task_agent.PlanningError` with the engine's log.
+
+unified-planning has process-wide defaults (``get_environment()`` and its engine factory);
+these modules never touch them. Each :class:`Planner` builds its problems in its own
+``Environment``, used by one solve at a time (a lock) and replaced every
+:data:`ENVIRONMENT_SOLVES` solves, since an environment caches every expression ever built.
+Creating an environment inspects the Python stack, as the engine factory would on every call
+(``_engines`` instantiates engines directly; see docs/benchmarks.md, Planning: Performance
+problems found). unified-planning is untyped: ``Any`` stays in the planner modules.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import anyio
+import msgspec
+from unified_planning.engines import PlanGenerationResultStatus as Status
+from unified_planning.environment import Environment
+from unified_planning.io import PDDLWriter
+
+from skill_agent import WorldView
+from skill_agent.conditions import ConditionRegistry
+
+from .._errors import PlannerTimeoutError, PlanningError, UnsolvableError
+from .._goals import Goal
+from ..discovery import AgentInfo
+from ..domain import PlanningTask
+from ..reachability import diagnose, relevant_objects, replay
+from ._convert import plan_steps, to_unified_planning
+from ._engines import SOLVED, UNSOLVABLE, solve_problem
+from ._plan import Engine, Plan, PlanStats, PlanStep
+
+__all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "Planner"]
+
+ENVIRONMENT_SOLVES = 32
+"""Solves per unified-planning environment before a planner starts a fresh one."""
+COMPRESS_BELOW = 0.5
+"""Compress only when the goal names fewer than this share of the task's objects: a goal
+naming most of them keeps nearly all the others too, and the analysis has a cost (see
+docs/benchmarks.md, Planning: Performance problems found)."""
+
+
+class _Attempt(msgspec.Struct, kw_only=True):
+    status: Any
+    steps: list[PlanStep]
+    log: str
+    convert_s: float
+    solve_s: float
+    engine_s: float
+
+
+class Planner:
+    """Solves planning tasks with one engine.
+
+    ``engine``: ``"kairos"`` (default) or ``"fast-downward"``. ``timeout``: seconds per
+    :meth:`solve` (both attempts when the compressed task falls back to the full one).
+    ``compress``: solve over the objects the goal can touch first. ``limiter``: bounds the
+    concurrent solves of :meth:`plan` (default: one at a time, its own)."""
+
+    def __init__(
+        self,
+        *,
+        engine: Engine = "kairos",
+        timeout: float = 30.0,
+        compress: bool = True,
+        limiter: anyio.CapacityLimiter | None = None,
+    ) -> None:
+        if engine not in ("kairos", "fast-downward"):
+            raise ValueError(f"unknown engine {engine!r}; use 'kairos' or 'fast-downward'")
+        self.engine: Engine = engine
+        self.timeout = timeout
+        self.compress = compress
+        self._limiter = limiter
+        self._lock = threading.Lock()
+        self._env: Any = None
+        self._env_solves = 0
+
+    # ------------------------------------------------------------------ engine calls
+
+    def _environment(self) -> Any:
+        """This planner's environment (call with the lock held)."""
+        if self._env is None or self._env_solves >= ENVIRONMENT_SOLVES:
+            self._env = Environment()
+            self._env.credits_stream = None
+            self._env_solves = 0
+        self._env_solves += 1
+        return self._env
+
+    def _attempt(self, task: PlanningTask, timeout: float) -> _Attempt:
+        t0 = time.perf_counter()
+        problem = to_unified_planning(task, self._environment())
+        t1 = time.perf_counter()
+        result = solve_problem(self.engine, problem, timeout)
+        t2 = time.perf_counter()
+        steps = plan_steps(task, result.plan) if result.status in SOLVED else []
+        log = "; ".join(str(m.message) for m in result.log_messages or ())
+        engine_s = float(result.metrics.get("engine_internal_time", math.nan))
+        return _Attempt(
+            status=result.status,
+            steps=steps,
+            log=log,
+            convert_s=t1 - t0,
+            solve_s=t2 - t1,
+            engine_s=engine_s,
+        )
+
+    # ------------------------------------------------------------------ public API
+
+    def solve(self, task: PlanningTask) -> Plan:
+        """A plan for ``task`` (blocking; see the module doc for the errors). Thread-safe:
+        concurrent calls on one planner run one after the other."""
+        with self._lock:
+            return self._solve(task)
+
+    def _solve(self, task: PlanningTask) -> Plan:
+        start = time.perf_counter()
+        deadline = start + self.timeout
+        solved = task
+        named = {a for lit in task.goal for a in lit.args}
+        if self.compress and len(named) < COMPRESS_BELOW * len(task.objects):
+            keep = relevant_objects(task)
+            if len(keep) < len(task.objects):
+                solved = task.restrict(keep)
+        attempt = self._attempt(solved, self.timeout)
+        fallback = False
+        problem = "not solved"
+        if attempt.status in SOLVED:
+            _, problem = replay(task, [s.ground for s in attempt.steps])
+        if solved is not task and problem and attempt.status != Status.TIMEOUT:
+            fallback, solved = True, task
+            attempt = self._attempt(task, deadline - time.perf_counter())
+            if attempt.status in SOLVED:
+                _, problem = replay(task, [s.ground for s in attempt.steps])
+        self._raise_for(attempt, task)
+        if problem:
+            raise PlanningError(
+                f"the {self.engine} plan does not replay on the task ({problem}); this is a "
+                "bug in the domain generation, please report it with emit_pddl's files"
+            )
+        stats = PlanStats(
+            engine=self.engine,
+            objects=len(task.objects),
+            objects_solved=len(solved.objects),
+            fallback=fallback,
+            convert_s=attempt.convert_s,
+            solve_s=attempt.solve_s,
+            engine_s=attempt.engine_s,
+            total_s=time.perf_counter() - start,
+        )
+        return Plan(steps=tuple(attempt.steps), task=task, stats=stats)
+
+    def _raise_for(self, attempt: _Attempt, task: PlanningTask) -> None:
+        if attempt.status in SOLVED:
+            return
+        if attempt.status == Status.TIMEOUT:
+            raise PlannerTimeoutError(
+                f"{self.engine} found no plan within {self.timeout} s ({len(task.objects)} "
+                f"objects, {len(task.actions)} actions); give it more time or split the goal",
+                timeout=self.timeout,
+            )
+        if attempt.status in UNSOLVABLE:
+            reason, unreachable = diagnose(task)
+            proven = attempt.status == Status.UNSOLVABLE_PROVEN
+            raise UnsolvableError(
+                f"no plan reaches the goal{' (proven)' if proven else ''}: {reason}",
+                unreachable=unreachable,
+                proven=proven,
+            )
+        raise PlanningError(
+            f"{self.engine} failed ({attempt.status.name}): {attempt.log or 'no message'}"
+        )
+
+    def plan_sync(
+        self,
+        agents: Sequence[AgentInfo],
+        view: WorldView,
+        goal: Goal,
+        *,
+        registry: ConditionRegistry | None = None,
+    ) -> Plan:
+        """Build the task from the agents and the world model, then :meth:`solve` it."""
+        from ..domain import build_task
+
+        return self.solve(build_task(agents, view, goal, registry=registry))
+
+    async def plan(
+        self,
+        agents: Sequence[AgentInfo],
+        view: WorldView,
+        goal: Goal,
+        *,
+        registry: ConditionRegistry | None = None,
+    ) -> Plan:
+        """:meth:`plan_sync` without blocking the loop: the task is built here (it reads
+        ``view``), the solve runs in a worker thread under the limiter."""
+        from ..domain import build_task
+
+        task = build_task(agents, view, goal, registry=registry)
+        limiter = self._limiter or anyio.CapacityLimiter(1)
+        self._limiter = limiter
+        return await anyio.to_thread.run_sync(self.solve, task, limiter=limiter)
+
+    def emit_pddl(
+        self, task: PlanningTask, directory: Path | str, *, compressed: bool = False
+    ) -> tuple[Path, Path]:
+        """Write ``domain.pddl`` and ``problem.pddl`` for ``task`` (or its compressed form)
+        into ``directory``; returns their paths."""
+        if compressed:
+            task = task.restrict(relevant_objects(task))
+        with self._lock:
+            writer = PDDLWriter(to_unified_planning(task, self._environment()))
+            text = writer.get_domain(), writer.get_problem()
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        domain, problem = out / "domain.pddl", out / "problem.pddl"
+        domain.write_text(text[0])
+        problem.write_text(text[1])
+        return domain, problem

@@ -1,0 +1,67 @@
+"""The Zenoh adapter of the client: :class:`ZenohTransport` talks to ``skimesh wm`` over a
+meshlink :class:`~meshlink.Mesh`: transactions on ``wm/rpc``, every read on the read-only
+``wm/query``, changes from ``wm/changes``.
+
+It raises :class:`~wm_store.TransportError` when the store cannot be reached and returns an
+error reply as is (the client turns it into the matching :class:`~wm_store.WmError` subclass).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+import msgspec
+
+from meshlink import Mesh, MeshlinkError, NoReplyError
+from meshlink import RemoteError as MeshRemoteError
+from wm_store._errors import ProtocolError, TransportError
+from wm_store.protocol import Change, Reply, Request, Transact, decode_change, decode_reply, encode
+
+__all__ = ["ZenohTransport"]
+
+_log = logging.getLogger(__name__)
+
+
+class ZenohTransport:
+    """Transport over a meshlink :class:`~meshlink.Mesh` session."""
+
+    def __init__(self, mesh: Mesh) -> None:
+        self.mesh = mesh
+
+    async def request(self, request: Request, *, timeout: float) -> Reply:
+        keys = self.mesh.keys
+        key = keys.wm_rpc() if isinstance(request, Transact) else keys.wm_query()
+        try:
+            data = await self.mesh.request(key, encode(request), timeout=timeout)
+        except MeshRemoteError as exc:
+            data = exc.payload
+        except NoReplyError as exc:
+            raise TransportError(
+                f"the world-model store did not answer on {key} within {timeout} s: is "
+                "`skimesh wm` running on this mesh, and does the ACL allow this client?"
+            ) from exc
+        except MeshlinkError as exc:
+            raise TransportError(str(exc)) from exc
+        try:
+            return decode_reply(data)
+        except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+            raise ProtocolError(f"undecodable reply from the store: {exc}") from exc
+
+    @asynccontextmanager
+    async def changes(self) -> AsyncIterator[AsyncIterator[Change]]:
+        async with self.mesh.subscribe(self.mesh.keys.wm_changes()) as subscription:
+            yield _decode_changes(subscription)
+
+
+async def _decode_changes(samples: AsyncIterator[object]) -> AsyncIterator[Change]:
+    async for sample in samples:
+        payload = getattr(sample, "payload", b"")
+        try:
+            change = decode_change(payload)
+        except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+            # A change we cannot read is a gap: the replica resyncs on the next revision.
+            _log.warning("skipped an undecodable change: %s", exc)
+            continue
+        yield change

@@ -1,0 +1,266 @@
+"""The loaded ontology: class taxonomy, relations, typed data properties, cardinalities and
+default individuals (templates), with the checks the store runs on every write.
+
+    onto = Ontology.default()                      # ontologies/skimesh.ttl
+    onto.is_a("KitBox", "Container")               # True: closures are precomputed
+    onto.check_relation("Gripper", "contain", "Gear")
+    onto.check_value("graspWidth", 0.204)          # within [0, 0.2] + tolerance 0.005
+    onto2 = onto.extend(classes=[ClassDef(name="Pulley", parent="Part")])
+
+An :class:`Ontology` is immutable: :meth:`Ontology.extend` returns a new one, the original is
+unchanged. Hot-path checks (``is_a``, ``subclasses``, ``relation``, ``check_value``,
+``check_relation``) are dict and set lookups; the graph is read once, by
+:func:`~wm_store.ontology._model.compile_graph`. Errors are :mod:`wm_store` classes and name
+the closest known name. How to extend the ontology: docs/guides/extend-the-ontology.md.
+
+This module loads files and Turtle texts, extends an ontology at run time and serializes the
+extension; the checks are layers :class:`Ontology` builds on, each in its module::
+
+    _taxonomy      classes and relations: closures, is-a, domains and ranges
+    _cardinality   minimum and maximum cardinalities
+    _values        data property values, templates (default individuals)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Final
+
+from rdflib import OWL, RDF, RDFS, XSD, Graph, Namespace, URIRef
+from rdflib import Literal as RdfLiteral
+from rdflib.util import guess_format
+
+from wm_store._errors import OntologyError, ValidationError
+from wm_store.ontology._literals import literal_from_value
+from wm_store.ontology._model import compile_graph
+from wm_store.ontology._terms import (
+    CLASS_NAME_RE,
+    SKM,
+    TEMPLATE_NAME_RE,
+    TYPED_KINDS,
+    ClassInfo,
+    Declarations,
+)
+from wm_store.ontology._values import OntologyValues
+from wm_store.protocol import ClassDef, TemplateDef
+
+__all__ = ["CORE_FILE", "NAMESPACE", "ONTOLOGY_IRI", "Ontology", "core_ontology_path"]
+
+ONTOLOGY_IRI: Final = "https://skimesh.dev/ontology"
+NAMESPACE: Final = SKM
+CORE_FILE: Final = "skimesh.ttl"
+_FILE_SUFFIXES: Final = (".ttl", ".owl", ".rdf", ".xml", ".nt", ".n3", ".jsonld")
+
+
+def core_ontology_path() -> Path:
+    """``skimesh.ttl``: in ``wm_store/ontologies/`` of a wheel, or ``ontologies/`` at the root
+    of a source checkout (editable install)."""
+    here = Path(__file__).resolve().parent.parent  # the wm_store package
+    candidates = (here / "ontologies" / CORE_FILE, here.parent / "ontologies" / CORE_FILE)
+    for path in candidates:
+        if path.is_file():
+            return path
+    raise OntologyError(f"core ontology not found; looked at {[str(p) for p in candidates]}")
+
+
+def _humanize(name: str) -> str:
+    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", name).lower()
+
+
+def _parse_into(graph: Graph, source: Path | str) -> None:
+    if isinstance(source, str) and not (
+        "\n" not in source and (source.endswith(_FILE_SUFFIXES) or Path(source).is_file())
+    ):
+        try:
+            graph.parse(data=source, format="turtle")
+        except Exception as exc:  # rdflib raises many types; all mean "bad Turtle"
+            raise OntologyError(f"cannot parse the Turtle text: {exc}") from exc
+        return
+    path = Path(source)
+    if not path.is_file():
+        raise OntologyError(f"ontology file {path} does not exist")
+    try:
+        graph.parse(path, format=guess_format(str(path)) or "turtle")
+    except Exception as exc:
+        raise OntologyError(f"cannot parse {path}: {exc}") from exc
+
+
+@functools.cache
+def _default() -> Ontology:
+    return Ontology.load(core_ontology_path())
+
+
+class Ontology(OntologyValues):
+    """A loaded ontology. Build with :meth:`load` or :meth:`default`; never mutate ``graph``."""
+
+    __slots__ = ("_added_classes", "_added_templates", "_base", "_graph")
+
+    def __init__(
+        self,
+        decl: Declarations,
+        graph: Graph,
+        *,
+        added_classes: tuple[ClassDef, ...] = (),
+        added_templates: Mapping[str, TemplateDef] | None = None,
+    ) -> None:
+        self._base = graph
+        self._added_classes = added_classes
+        self._added_templates = dict(added_templates or {})
+        self._graph: Graph | None = None
+        super().__init__(decl)
+
+    # ----------------------------------------------------------------------- construction
+
+    @classmethod
+    def load(cls, *sources: Path | str) -> Ontology:
+        """Load Turtle files (or RDF/XML ``.owl``) and Turtle texts (a ``str`` that is not a
+        file name) into one ontology. Raises OntologyError saying what is wrong and where."""
+        if not sources:
+            raise OntologyError("Ontology.load() needs at least one file or Turtle text")
+        graph = Graph()
+        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
+            graph.bind(prefix, ns)
+        for source in sources:
+            _parse_into(graph, source)
+        decl = compile_graph(graph)
+        try:
+            return cls(decl, graph)
+        except ValidationError as exc:
+            raise OntologyError(f"in the ontology files: {exc}") from exc
+
+    @classmethod
+    def default(cls) -> Ontology:
+        """The core ontology (``ontologies/skimesh.ttl``), loaded once per process."""
+        return _default()
+
+    def extend(
+        self, *, classes: Sequence[ClassDef] = (), templates: Sequence[TemplateDef] = ()
+    ) -> Ontology:
+        """A new ontology with ``classes`` (in order: one may be the parent of the next) and
+        ``templates`` added; this one is unchanged. Templates added earlier by ``extend`` may
+        be replaced, templates from the ontology files may not. Nothing is re-parsed."""
+        if not classes and not templates:
+            return self
+        known = dict(self._decl.classes)
+        taken = {**self._decl.iris, **{k: SKM[k] for k in TYPED_KINDS}}
+        for c in classes:
+            what = f"cannot define class {c.name!r}"
+            if not CLASS_NAME_RE.fullmatch(c.name):
+                raise OntologyError(
+                    f"{what}: a class name starts with a capital letter and has only letters, "
+                    "digits and '_' (e.g. 'SpurGear')"
+                )
+            if c.name in known:
+                raise OntologyError(f"{what}: it is already defined; use it or pick a new name")
+            if c.name in taken or c.name in self._decl.templates:
+                owner = taken.get(c.name, "a template")
+                raise OntologyError(f"{what}: the name is taken by <{owner}>")
+            if c.parent not in known:
+                raise self._unknown_class(c.parent, f"{what}: unknown parent", known)
+            label = c.label or _humanize(c.name)
+            known[c.name] = ClassInfo(
+                name=c.name, parents=(c.parent,), label=label, comment=c.comment
+            )
+        all_templates = dict(self._decl.templates)
+        added = dict(self._added_templates)
+        for t in templates:
+            what = f"cannot define template {t.name!r}"
+            if not TEMPLATE_NAME_RE.fullmatch(t.name):
+                raise OntologyError(
+                    f"{what}: start with a letter, then letters, digits, '_' or '-' "
+                    "(e.g. 'big-gear')"
+                )
+            if t.name in self._decl.templates and t.name not in added:
+                raise OntologyError(
+                    f"{what}: it comes from the ontology files and cannot be replaced at run "
+                    "time; define a template with a new name"
+                )
+            if t.name in known or (t.name in taken and t.name not in all_templates):
+                raise OntologyError(f"{what}: the name is taken by a class or property")
+            copy = TemplateDef(
+                name=t.name, type=t.type, label=t.label, properties=dict(t.properties)
+            )
+            all_templates[t.name] = added[t.name] = copy
+        decl = dataclasses.replace(self._decl, classes=known, templates=all_templates)
+        return Ontology(
+            decl,
+            self._base,
+            added_classes=self._added_classes + tuple(classes),
+            added_templates=added,
+        )
+
+    # ----------------------------------------------------------------------- graph views
+
+    @property
+    def namespace(self) -> Namespace:
+        return SKM
+
+    @property
+    def graph(self) -> Graph:
+        """Files plus extensions as one rdflib graph (built on first use; read-only)."""
+        if self._graph is None:
+            if self._added_classes or self._added_templates:
+                merged = Graph()
+                for prefix, ns in self._base.namespaces():
+                    merged.bind(prefix, ns)
+                merged += self._base
+                merged += self._extension_graph()
+                self._graph = merged
+            else:
+                self._graph = self._base
+        return self._graph
+
+    @property
+    def extended_classes(self) -> tuple[ClassDef, ...]:
+        """Classes added by :meth:`extend`, in order (for snapshots and persistence)."""
+        return self._added_classes
+
+    @property
+    def extended_templates(self) -> tuple[TemplateDef, ...]:
+        """Templates added (or replaced) by :meth:`extend`."""
+        return tuple(self._added_templates.values())
+
+    def _iri(self, name: str) -> URIRef:
+        return self._decl.iris.get(name, SKM[name])
+
+    def _extension_graph(self) -> Graph:
+        g = Graph()
+        g.bind("skm", SKM)
+        g.bind("owl", OWL)
+        head = URIRef(f"{ONTOLOGY_IRI}/runtime-extension")
+        g.add((head, RDF.type, OWL.Ontology))
+        g.add((head, OWL.imports, URIRef(ONTOLOGY_IRI)))
+        for c in self._added_classes:
+            iri, info = SKM[c.name], self._decl.classes[c.name]
+            g.add((iri, RDF.type, OWL.Class))
+            g.add((iri, RDFS.subClassOf, self._iri(c.parent)))
+            g.add((iri, RDFS.label, RdfLiteral(info.label, lang="en")))
+            if c.comment:
+                g.add((iri, RDFS.comment, RdfLiteral(c.comment, lang="en")))
+        for t in self._added_templates.values():
+            iri = SKM[t.name]
+            g.add((iri, RDF.type, OWL.NamedIndividual))
+            g.add((iri, RDF.type, self._iri(t.type)))
+            g.add((iri, SKM.template, RdfLiteral(True)))
+            if t.label:
+                g.add((iri, RDFS.label, RdfLiteral(t.label, lang="en")))
+            for key, value in t.properties.items():
+                g.add((iri, self._iri(key), literal_from_value(value)))
+        return g
+
+    def extension_turtle(self) -> str:
+        """Turtle of what :meth:`extend` added ("" if nothing); loads with the core files."""
+        if not (self._added_classes or self._added_templates):
+            return ""
+        return self._extension_graph().serialize(format="turtle")
+
+    def __repr__(self) -> str:
+        d = self._decl
+        return (
+            f"<Ontology {len(d.classes)} classes, {len(d.relations)} relations, "
+            f"{len(d.data_properties)} data properties, {len(d.templates)} templates>"
+        )

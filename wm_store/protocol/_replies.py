@@ -1,0 +1,112 @@
+"""Replies of the store, one per request kind, and :class:`ErrorReply` (:data:`Reply`)."""
+
+from __future__ import annotations
+
+from typing import TypeAlias
+
+from msgspec import Struct
+
+from wm_store.protocol._changes import Change
+from wm_store.protocol._values import SCHEMA_VERSION, ClassDef, Element, Relation, TemplateDef
+
+# --------------------------------------------------------------------------- replies
+
+
+class ElementsReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    elements: list[Element]
+    schema_version: int = SCHEMA_VERSION
+
+
+class RelationsReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    relations: list[Relation]
+    schema_version: int = SCHEMA_VERSION
+
+
+class SparqlReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    variables: list[str]
+    rows: list[list[str | None]]
+    schema_version: int = SCHEMA_VERSION
+
+
+class TransactReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    ids: dict[str, str] = {}
+    """Assigned ids of added elements, by ``ref`` (and by index ``"#<n>"`` of the op)."""
+    duplicate: bool = False
+    schema_version: int = SCHEMA_VERSION
+
+
+class SnapshotReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    elements: list[Element]
+    relations: list[Relation]
+    classes: list[ClassDef] = []
+    templates: list[TemplateDef] = []
+    counters: dict[str, int] = {}
+    schema_version: int = SCHEMA_VERSION
+
+
+class ChangesReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    changes: list[Change]
+    schema_version: int = SCHEMA_VERSION
+
+
+class InfoReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    revision: int
+    elements: int
+    relations: int
+    oldest_change: int
+    durability: str
+    data_dir: str
+    started_at: float
+    schema_version: int = SCHEMA_VERSION
+
+
+class CardinalityViolation(Struct, frozen=True, kw_only=True):
+    """``element`` (of class ``type``) has ``present`` ``relation`` triples (counting
+    sub-properties, to objects of ``on_class`` if given) where its class requires at least
+    ``required`` (a restriction declared on ``declared_on``, ``type`` or a superclass)."""
+
+    element: str
+    type: str
+    relation: str
+    required: int
+    present: int
+    on_class: str = ""
+    declared_on: str = ""
+    message: str = ""
+
+
+class CardinalityReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    """The answer to :class:`CheckCardinality`: every violation, in element id order;
+    ``checked`` is the number of elements the check covered."""
+
+    revision: int
+    checked: int
+    violations: list[CardinalityViolation] = []
+    schema_version: int = SCHEMA_VERSION
+
+
+class ErrorReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    """The request was refused; nothing changed. ``code`` is the error class's code."""
+
+    code: str
+    message: str
+    schema_version: int = SCHEMA_VERSION
+
+
+Reply: TypeAlias = (
+    ElementsReply
+    | RelationsReply
+    | SparqlReply
+    | TransactReply
+    | SnapshotReply
+    | ChangesReply
+    | InfoReply
+    | CardinalityReply
+    | ErrorReply
+)

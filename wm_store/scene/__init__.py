@@ -1,0 +1,41 @@
+"""The scene graph: elements and relations with their indexes, the queries over them, and the
+transactions that change them. Pure and synchronous; shared by the store (its authoritative
+state) and the client (its replica), so both index and answer the same way.
+
+- :class:`SceneState`: elements, relations and native indexes (type, label, relations in both
+  directions, spatial parent, sorted numeric properties); applies deltas, validates nothing.
+- :func:`resolve`, :func:`match_relations`, :func:`id_sort_key`: read queries.
+- :func:`apply_transaction`: validate ops against the ontology and apply them all, or none.
+- :func:`merge_observation` / :func:`resolve_observations`: multi-source property resolution.
+- :func:`min_cardinality_violations`: the minimum-cardinality report (``CheckCardinality``).
+"""
+
+from ._cardinality import min_cardinality_violations as min_cardinality_violations
+from ._query import id_sort_key as id_sort_key
+from ._query import match_relations as match_relations
+from ._query import resolve as resolve
+from ._resolution import ResolutionPolicy as ResolutionPolicy
+from ._resolution import merge_observation as merge_observation
+from ._resolution import resolve_observations as resolve_observations
+from ._state import SceneState as SceneState
+from ._state import Undo as Undo
+from ._state import parse_id as parse_id
+from ._transactions import SELF as SELF
+from ._transactions import TxnResult as TxnResult
+from ._transactions import apply_transaction as apply_transaction
+
+__all__ = [
+    "SELF",
+    "ResolutionPolicy",
+    "SceneState",
+    "TxnResult",
+    "Undo",
+    "apply_transaction",
+    "id_sort_key",
+    "match_relations",
+    "merge_observation",
+    "min_cardinality_violations",
+    "parse_id",
+    "resolve",
+    "resolve_observations",
+]

@@ -1,0 +1,290 @@
+"""Transactions: validate a list of ops against the ontology and apply them all, or none.
+
+:func:`apply_transaction` mutates a :class:`~wm_store.scene.SceneState` op by op, recording
+every mutation as a delta (what the change stream publishes) and an undo record. If any op is
+refused, the undo records are applied in reverse and the error propagates: the state is exactly
+as before. Rules enforced here:
+
+- element types, relation names and data property names exist in the ontology;
+- property values have the declared kind and lie in the declared range (with tolerance);
+- relations respect the ontology's domain and range;
+- spatial relations (sub-properties of ``spatialRelation``) keep a tree: one spatial parent
+  per element, no cycles;
+- maximum cardinalities stated in the ontology;
+- compare-and-set: ``expect_rev`` on an element op must equal the element's current ``rev``;
+- ids are store-assigned ``<Type>-<n>`` and never reused (an explicit id must be fresh).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import msgspec
+
+from wm_store._errors import (
+    ConflictError,
+    DuplicateIdError,
+    ElementNotFoundError,
+    TreeShapeError,
+    ValidationError,
+)
+from wm_store.ontology import Ontology
+from wm_store.protocol import (
+    AddElement,
+    ClassDefined,
+    DefineClass,
+    DefineTemplate,
+    Delta,
+    Element,
+    ElementPut,
+    ElementRemoved,
+    Observation,
+    Observe,
+    Op,
+    Relation,
+    RelationAdded,
+    RelationRemoved,
+    RemoveElement,
+    SetRelation,
+    TemplateDefined,
+    UnsetRelation,
+    UpdateElement,
+    Value,
+)
+from wm_store.scene._resolution import merge_observation, resolve_observations
+from wm_store.scene._state import SceneState, Undo, parse_id
+
+__all__ = ["SELF", "TxnResult", "apply_transaction"]
+
+SELF = "$"
+"""In ``AddElement.relations``, stands for the element being added."""
+
+
+class TxnResult(NamedTuple):
+    deltas: list[Delta]
+    undo: list[Undo]
+    ids: dict[str, str]
+    ontology: Ontology
+
+
+def apply_transaction(
+    state: SceneState,
+    ontology: Ontology,
+    ops: Sequence[Op],
+    *,
+    revision: int,
+    now: float | None = None,
+) -> TxnResult:
+    """Apply ``ops`` to ``state`` as revision ``revision``; all or nothing.
+
+    Raises a :class:`~wm_store.WmError` subclass naming the op (by index) and the
+    problem; the state is then unchanged.
+    """
+    txn = _Txn(state, ontology, revision, time.time() if now is None else now)
+    counters = dict(state.counters)
+    try:
+        for index, op in enumerate(ops):
+            try:
+                txn.apply(index, op)
+            except ValidationError as exc:
+                raise type(exc)(f"op #{index} ({type(op).__name__}): {exc}") from exc
+    except BaseException:
+        for record in reversed(txn.undo):
+            state.undo(record)
+        state.counters = counters
+        raise
+    return TxnResult(txn.deltas, txn.undo, txn.ids, txn.ontology)
+
+
+class _Txn:
+    def __init__(self, state: SceneState, ontology: Ontology, revision: int, now: float) -> None:
+        self.state = state
+        self.ontology = ontology
+        self.revision = revision
+        self.now = now
+        self.deltas: list[Delta] = []
+        self.undo: list[Undo] = []
+        self.ids: dict[str, str] = {}
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _emit(self, delta: Delta) -> None:
+        self.undo.append(self.state.apply(delta))
+        self.deltas.append(delta)
+
+    def _id(self, ref_or_id: str) -> str:
+        return self.ids.get(ref_or_id, ref_or_id)
+
+    def _need(self, ref_or_id: str) -> Element:
+        element = self.state.get(self._id(ref_or_id))
+        if element is None:
+            raise ElementNotFoundError(f"no element {ref_or_id!r}")
+        return element
+
+    def _check_rev(self, element: Element, expect_rev: int | None) -> None:
+        if expect_rev is not None and element.rev != expect_rev:
+            raise ConflictError(
+                f"{element.id} is at rev {element.rev}, not the expected {expect_rev}; "
+                "re-read it and retry"
+            )
+
+    def _check_property(self, element_type: str, name: str, value: Value) -> None:
+        if value is None:
+            self.ontology.data_property(name)  # deleting: the name must still exist
+        else:
+            self.ontology.check_property(element_type, name, value)
+
+    def _stamp(self, element: Element, **changes: object) -> Element:
+        return msgspec.structs.replace(element, rev=self.revision, updated_at=self.now, **changes)
+
+    # ------------------------------------------------------------------ ops
+
+    def apply(self, index: int, op: Op) -> None:
+        match op:
+            case AddElement():
+                self._add(index, op)
+            case UpdateElement():
+                self._update(op)
+            case Observe():
+                self._observe(op)
+            case RemoveElement():
+                self._remove(op)
+            case SetRelation(subject=s, predicate=p, object=o):
+                self._set_relation(Relation(self._id(s), p, self._id(o)))
+            case UnsetRelation(subject=s, predicate=p, object=o):
+                rel = Relation(self._id(s), p, self._id(o))
+                self.ontology.relation(p)
+                if self.state.has_relation(rel):
+                    self._emit(RelationRemoved(rel))
+            case DefineClass(cls=cls):
+                self.ontology = self.ontology.extend(classes=[cls])
+                self._emit(ClassDefined(cls))
+            case DefineTemplate(template=template):
+                self.ontology = self.ontology.extend(templates=[template])
+                self._emit(TemplateDefined(template))
+
+    def _add(self, index: int, op: AddElement) -> None:
+        element_type = self.ontology.check_class(op.type)
+        for name, value in op.properties.items():
+            self._check_property(element_type, name, value)
+        element_id = self._new_id(element_type, op.id)
+        ref = op.ref or f"#{index}"
+        if ref in self.ids:
+            raise ValidationError(f"ref {ref!r} is used twice in this transaction")
+        self.ids[ref] = element_id
+        self.ids.setdefault(f"#{index}", element_id)
+        props: dict[str, Value] = {k: v for k, v in op.properties.items() if v is not None}
+        element = Element(
+            id=element_id,
+            type=element_type,
+            label=op.label,
+            properties=props,
+            rev=self.revision,
+            updated_at=self.now,
+        )
+        self._emit(ElementPut(element))
+        for rel in op.relations:
+            s = element_id if rel.subject in (SELF, ref) else self._id(rel.subject)
+            o = element_id if rel.object in (SELF, ref) else self._id(rel.object)
+            self._set_relation(Relation(s, rel.predicate, o))
+
+    def _new_id(self, element_type: str, explicit: str) -> str:
+        used = self.state.counters.get(element_type, 0)
+        if not explicit:
+            return f"{element_type}-{used + 1}"
+        parsed = parse_id(explicit)
+        if parsed is None or parsed[0] != element_type:
+            raise DuplicateIdError(
+                f"explicit id {explicit!r} must have the form {element_type}-<n>"
+            )
+        if explicit in self.state or parsed[1] <= used:
+            raise DuplicateIdError(
+                f"id {explicit!r} is taken or was used before (ids are never reused); "
+                f"the next free one is {element_type}-{used + 1}"
+            )
+        return explicit
+
+    def _update(self, op: UpdateElement) -> None:
+        element = self._need(op.id)
+        self._check_rev(element, op.expect_rev)
+        props = {} if op.mode == "replace" else dict(element.properties)
+        for name in op.remove:
+            props.pop(name, None)
+        for name, value in op.properties.items():
+            self._check_property(element.type, name, value)
+            if value is None:
+                props.pop(name, None)
+            else:
+                props[name] = value
+        observations = {k: v for k, v in element.observations.items() if k in props}
+        label = element.label if op.label is None else op.label
+        self._emit(
+            ElementPut(
+                self._stamp(element, properties=props, observations=observations, label=label)
+            )
+        )
+
+    def _observe(self, op: Observe) -> None:
+        element = self._need(op.id)
+        self._check_property(element.type, op.property, op.value)
+        obs = Observation(
+            value=op.value,
+            source=op.source,
+            stamp=self.now if op.stamp is None else op.stamp,
+            confidence=op.confidence,
+        )
+        merged = merge_observation(element.observations.get(op.property, ()), obs)
+        policy = self.ontology.data_property(op.property).resolution
+        props = dict(element.properties)
+        props[op.property] = resolve_observations(merged, policy)
+        observations = dict(element.observations)
+        observations[op.property] = merged
+        self._emit(ElementPut(self._stamp(element, properties=props, observations=observations)))
+
+    def _remove(self, op: RemoveElement) -> None:
+        element = self._need(op.id)
+        self._check_rev(element, op.expect_rev)
+        doomed = [element.id]
+        if op.branch:
+            stack = [element.id]
+            while stack:
+                for rel in self.state.spatial_children(stack.pop()):
+                    doomed.append(rel.object)
+                    stack.append(rel.object)
+        for element_id in reversed(doomed):
+            for rel in self.state.relations_of(element_id):
+                self._emit(RelationRemoved(rel))
+            self._emit(ElementRemoved(element_id))
+
+    def _set_relation(self, rel: Relation) -> None:
+        subject, obj = self._need(rel.subject), self._need(rel.object)
+        info = self.ontology.check_relation(subject.type, rel.predicate, obj.type)
+        if self.state.has_relation(rel):
+            return
+        if info.spatial:
+            self._check_tree(rel)
+        existing = [
+            (r.predicate, self.state.elements[r.object].type)
+            for r in self.state.match_relations(rel.subject)
+        ]
+        self.ontology.check_max_cardinality(subject.type, rel.predicate, obj.type, existing)
+        self._emit(RelationAdded(rel))
+
+    def _check_tree(self, rel: Relation) -> None:
+        current = self.state.parent(rel.object)
+        if current is not None:
+            raise TreeShapeError(
+                f"{rel.object} already has the spatial parent {current.subject} "
+                f"({current.predicate}); unset that relation first to move it"
+            )
+        walk: str | None = rel.subject
+        while walk is not None:
+            if walk == rel.object:
+                raise TreeShapeError(
+                    f"{rel.predicate}({rel.subject}, {rel.object}) would make a cycle: "
+                    f"{rel.object} is an ancestor of {rel.subject}"
+                )
+            parent = self.state.parent(walk)
+            walk = parent.subject if parent is not None else None

@@ -1,0 +1,130 @@
+"""Request -> reply dispatch of the world-model store, independent of the transport.
+
+:class:`WmService` answers every :data:`~wm_store.protocol.Request` with a
+:data:`~wm_store.protocol.Reply`. It never raises for bad input: malformed bytes, unknown tags,
+wrong field types, unknown names, rule violations and oversized messages all become an
+:class:`~wm_store.protocol.ErrorReply` naming the problem, and the state is unchanged. The
+Zenoh server and the in-memory test transport both sit on top of it.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import msgspec
+
+from wm_store._errors import ElementNotFoundError, ProtocolError, WmError
+from wm_store.protocol import (
+    CardinalityReply,
+    ChangesSince,
+    CheckCardinality,
+    ElementsReply,
+    ErrorReply,
+    GetElements,
+    Info,
+    Parent,
+    Relations,
+    RelationsReply,
+    Reply,
+    Request,
+    Resolve,
+    Snapshot,
+    Sparql,
+    Transact,
+    decode_request,
+    encode,
+)
+from wm_store.rdf import SparqlEngine
+from wm_store.scene import match_relations, min_cardinality_violations, resolve
+from wm_store.server._store import WmStore
+
+__all__ = ["MAX_REQUEST_BYTES", "WmService"]
+
+_log = logging.getLogger(__name__)
+
+MAX_REQUEST_BYTES = 16 * 1024 * 1024
+
+
+class WmService:
+    """Answers world-model requests against one :class:`~wm_store.server.WmStore`."""
+
+    def __init__(self, store: WmStore, *, max_request_bytes: int = MAX_REQUEST_BYTES) -> None:
+        self.store = store
+        self.max_request_bytes = max_request_bytes
+        self._sparql = SparqlEngine()
+
+    async def handle_bytes(self, data: bytes, *, read_only: bool = False) -> tuple[bytes, bool]:
+        """Decode, answer and encode one request. Returns ``(reply bytes, ok)``.
+
+        ``read_only`` refuses transactions (the ``wm/query`` endpoint)."""
+        if len(data) > self.max_request_bytes:
+            reply: Reply = ErrorReply(
+                code=ProtocolError.code,
+                message=f"request of {len(data)} bytes exceeds the limit of "
+                f"{self.max_request_bytes}; split the transaction",
+            )
+        else:
+            try:
+                request = decode_request(data)
+            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                reply = ErrorReply(code=ProtocolError.code, message=f"malformed request: {exc}")
+            else:
+                if read_only and isinstance(request, Transact):
+                    reply = ErrorReply(
+                        code=ProtocolError.code,
+                        message="this endpoint is read-only: send transactions to wm/rpc",
+                    )
+                else:
+                    reply = await self.handle(request)
+        return encode(reply), not isinstance(reply, ErrorReply)
+
+    async def handle(self, request: Request) -> Reply:
+        """Answer one decoded request; errors become :class:`ErrorReply`."""
+        try:
+            return await self._dispatch(request)
+        except WmError as exc:
+            return ErrorReply(code=exc.code, message=str(exc))
+        except (ValueError, TypeError, KeyError) as exc:
+            _log.warning("request %s refused: %s", type(request).__name__, exc)
+            return ErrorReply(code="bad_request", message=f"{type(exc).__name__}: {exc}")
+
+    async def _dispatch(self, request: Request) -> Reply:
+        store = self.store
+        state = store.state
+        match request:
+            case GetElements(ids=ids):
+                missing = [i for i in ids if i not in state]
+                if missing:
+                    raise ElementNotFoundError(f"no element(s) {', '.join(missing)}")
+                return ElementsReply(
+                    revision=state.revision, elements=[state.elements[i] for i in ids]
+                )
+            case Resolve(query=query, limit=limit):
+                found = resolve(state, store.ontology, query, limit)
+                return ElementsReply(revision=state.revision, elements=found)
+            case Relations(subject=s, predicate=p, object=o, include_subproperties=sub):
+                rels = match_relations(state, store.ontology, s, p, o, include_subproperties=sub)
+                return RelationsReply(revision=state.revision, relations=rels)
+            case Parent(id=element_id):
+                if element_id not in state:
+                    raise ElementNotFoundError(f"no element {element_id!r}")
+                parent = state.parent(element_id)
+                return RelationsReply(
+                    revision=state.revision, relations=[] if parent is None else [parent]
+                )
+            case Sparql(query=text, bindings=bindings):
+                return await self._sparql.query_async(state, store.ontology, text, bindings)
+            case Transact():
+                return await store.transact(request)
+            case Snapshot(revision=revision):
+                return store.snapshot(revision)
+            case ChangesSince(revision=revision, limit=limit):
+                return store.changes_since(revision, limit)
+            case Info():
+                return store.info()
+            case CheckCardinality(ids=ids):
+                checked, violations = min_cardinality_violations(state, store.ontology, ids)
+                return CardinalityReply(
+                    revision=state.revision, checked=checked, violations=violations
+                )
+        raise ProtocolError(f"unsupported request {type(request).__name__}")  # pragma: no cover

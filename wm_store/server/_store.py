@@ -1,0 +1,317 @@
+"""The authoritative world-model store (transport-free core of ``skimesh wm``).
+
+:class:`WmStore` owns the scene state, the ontology (with its run-time extensions), the durable
+log and a bounded history of changes. A transaction is validated and applied in memory at once
+(so revisions are assigned in a total order), then made durable; its caller is answered, and
+the :class:`~wm_store.protocol.Change` is handed to listeners, only after it is durable, and
+always in revision order.
+
+Reads see every applied transaction, including one whose fsync is still under way (a window of
+about a millisecond). If the durable log fails, the store stops accepting writes: a store must
+never acknowledge what it could not persist.
+
+Run :meth:`WmStore.run` in a task group before writing; it drives the log writer and the
+periodic snapshots. Without a data directory the store is memory-only (tests, the demo).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import OrderedDict, deque
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated, Literal
+
+import anyio
+import msgspec
+from anyio.abc import TaskStatus
+from msgspec import Meta
+
+from wm_store._errors import ConflictError, HistoryCompactedError, StorageError
+from wm_store.durability import Durability
+from wm_store.ontology import Ontology
+from wm_store.protocol import (
+    Change,
+    ChangesReply,
+    InfoReply,
+    SnapshotReply,
+    Transact,
+    TransactReply,
+    encode,
+)
+from wm_store.scene import SceneState, Undo, apply_transaction
+
+__all__ = ["ChangeListener", "StoreConfig", "WmStore"]
+
+ChangeListener = Callable[[Change, bytes], None]
+"""Called with each durable change and its encoded bytes, in revision order, on the loop."""
+
+
+class StoreConfig(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    data_dir: str | None = None
+    """Where the log and snapshots live; ``None`` keeps everything in memory."""
+    durability: Literal["fsync", "group", "none"] = "group"
+    snapshot_every: Annotated[int, Meta(ge=1)] = 10_000
+    """Write a snapshot (and compact the log) after this many revisions."""
+    history: Annotated[int, Meta(ge=1)] = 10_000
+    """How many recent changes are kept for ``changes-since`` and past snapshots."""
+    max_ops: Annotated[int, Meta(ge=1)] = 10_000
+    """Largest number of ops one transaction may carry."""
+    dedupe: Annotated[int, Meta(ge=0)] = 10_000
+    """How many recent transaction ids are remembered for idempotent retries."""
+
+
+class _DiskSnapshot(msgspec.Struct):
+    """What a snapshot file holds: the scene and the recent transaction ids (for dedupe)."""
+
+    scene: SnapshotReply
+    txns: list[tuple[str, TransactReply]] = []
+
+
+class _Entry(msgspec.Struct):
+    change: Change
+    payload: bytes
+    undo: list[Undo]
+
+
+class WmStore:
+    """Scene state + ontology + durable log + history. One instance per store process."""
+
+    def __init__(self, ontology: Ontology, config: StoreConfig | None = None) -> None:
+        self.config = config or StoreConfig()
+        self.ontology = ontology
+        self.state = SceneState()
+        self.state.set_spatial_predicates(n for n, r in ontology.relations.items() if r.spatial)
+        self.started_at = time.time()
+        self.recovery_detail = ""
+        self._base_ontology = ontology
+        self._durability: Durability | None = None
+        self._history: deque[_Entry] = deque(maxlen=self.config.history)
+        self._txn_revisions: OrderedDict[str, TransactReply] = OrderedDict()
+        self._listeners: list[ChangeListener] = []
+        self._durable_done: dict[int, _Entry] = {}
+        self._published = 0
+        self._last_snapshot = 0
+        self._failed: StorageError | None = None
+        self._snapshot_wanted = anyio.Event()
+        self._published_changed = anyio.Event()
+
+    # ------------------------------------------------------------------ life cycle
+
+    @classmethod
+    async def open(cls, ontology: Ontology, config: StoreConfig | None = None) -> WmStore:
+        """Create the store and recover it from its data directory (if any)."""
+        store = cls(ontology, config)
+        if store.config.data_dir is not None:
+            await store._recover(Path(store.config.data_dir))
+        return store
+
+    async def _recover(self, data_dir: Path) -> None:
+        durability, recovered = await Durability.open(data_dir, mode=self.config.durability)
+        self._durability = durability
+        if recovered.snapshot is not None:
+            seq, payload = recovered.snapshot
+            disk = msgspec.msgpack.decode(payload, type=_DiskSnapshot)
+            self.state = SceneState.from_snapshot(disk.scene, self.state.spatial_predicates)
+            self._txn_revisions.update(disk.txns)
+            self._reload_ontology()
+            self._last_snapshot = seq
+        for seq, payload in recovered.records:
+            change = msgspec.msgpack.decode(payload, type=Change)
+            if change.revision != seq or seq != self.state.revision + 1:
+                raise StorageError(
+                    f"log record {seq} does not follow revision {self.state.revision}"
+                )
+            undo = [self.state.apply(d) for d in change.deltas]
+            self.state.revision = seq
+            self._remember(_Entry(change, payload, undo))
+        self._reload_ontology()
+        self._published = self.state.revision
+        details = [recovered.report.detail, recovered.snapshot_error or ""]
+        self.recovery_detail = "; ".join(d for d in details if d)
+
+    def _reload_ontology(self) -> None:
+        if self.state.classes or self.state.templates:
+            self.ontology = self._base_ontology.extend(
+                classes=self.state.classes, templates=list(self.state.templates.values())
+            )
+
+    async def run(self, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED) -> None:
+        """Drive the durable log and periodic snapshots until cancelled."""
+        async with anyio.create_task_group() as tg:
+            if self._durability is not None:
+                await tg.start(self._durability.run)
+                tg.start_soon(self._snapshotter)
+            task_status.started()
+            await anyio.sleep_forever()
+
+    async def aclose(self) -> None:
+        """Write a final snapshot and close the log (call after :meth:`run` was cancelled)."""
+        if self._durability is not None:
+            with anyio.CancelScope(shield=True):
+                # Only a fully durable state may be snapshotted: transactions applied in memory
+                # whose commit did not finish must not reach the disk by the back door.
+                durable = self._failed is None and self._published == self.state.revision
+                if durable and self.state.revision > self._last_snapshot:
+                    await self._write_snapshot()
+                await self._durability.aclose()
+
+    # ------------------------------------------------------------------ writes
+
+    def add_listener(self, listener: ChangeListener) -> None:
+        self._listeners.append(listener)
+
+    def remove_listener(self, listener: ChangeListener) -> None:
+        self._listeners.remove(listener)
+
+    async def transact(self, request: Transact) -> TransactReply:
+        """Validate, apply, persist and publish one transaction; return its revision and ids.
+
+        Raises a :class:`~wm_store.ValidationError` subclass (state unchanged) or
+        :class:`~wm_store.StorageError` (the store can no longer write).
+        """
+        if self._failed is not None:
+            raise StorageError(f"the store stopped accepting writes: {self._failed}")
+        if len(request.ops) > self.config.max_ops:
+            raise ConflictError(f"{len(request.ops)} ops exceed the limit of {self.config.max_ops}")
+        if request.txn_id and request.txn_id in self._txn_revisions:
+            first = self._txn_revisions[request.txn_id]
+            await self._wait_published(first.revision)
+            return msgspec.structs.replace(first, duplicate=True)
+        if request.expect_revision is not None and request.expect_revision != self.state.revision:
+            raise ConflictError(
+                f"the store is at revision {self.state.revision}, "
+                f"not the expected {request.expect_revision}"
+            )
+        revision = self.state.revision + 1
+        now = time.time()
+        result = apply_transaction(
+            self.state, self.ontology, request.ops, revision=revision, now=now
+        )
+        self.state.revision = revision
+        self.ontology = result.ontology
+        refs = {k: v for k, v in result.ids.items() if not k.startswith("#")}
+        change = Change(
+            revision=revision,
+            deltas=result.deltas,
+            stamp=now,
+            txn_id=request.txn_id,
+            author=request.author,
+            ids=refs,
+        )
+        entry = _Entry(change, encode(change), result.undo)
+        reply = TransactReply(revision=revision, ids=result.ids)
+        self._remember(entry, reply)
+        if self._durability is not None:
+            try:
+                await self._durability.commit(revision, entry.payload)
+            except StorageError as exc:
+                self._failed = exc
+                self._published_changed.set()
+                raise
+        self._durable_done[revision] = entry
+        self._publish_ready()
+        await self._wait_published(revision)
+        return reply
+
+    def _remember(self, entry: _Entry, reply: TransactReply | None = None) -> None:
+        self._history.append(entry)
+        txn_id = entry.change.txn_id
+        if txn_id and self.config.dedupe:
+            self._txn_revisions[txn_id] = reply or TransactReply(
+                revision=entry.change.revision, ids=entry.change.ids
+            )
+            while len(self._txn_revisions) > self.config.dedupe:
+                self._txn_revisions.popitem(last=False)
+
+    def _publish_ready(self) -> None:
+        advanced = False
+        while (entry := self._durable_done.pop(self._published + 1, None)) is not None:
+            self._published += 1
+            advanced = True
+            for listener in list(self._listeners):
+                listener(entry.change, entry.payload)
+        if advanced:
+            self._published_changed.set()
+            self._published_changed = anyio.Event()
+        if self._published - self._last_snapshot >= self.config.snapshot_every:
+            self._snapshot_wanted.set()
+
+    async def _wait_published(self, revision: int) -> None:
+        while self._published < revision:
+            if self._failed is not None:
+                raise StorageError(f"the store stopped accepting writes: {self._failed}")
+            await self._published_changed.wait()
+
+    # ------------------------------------------------------------------ snapshots
+
+    async def _snapshotter(self) -> None:
+        while True:
+            await self._snapshot_wanted.wait()
+            self._snapshot_wanted = anyio.Event()
+            await self._write_snapshot()
+
+    async def _write_snapshot(self) -> None:
+        assert self._durability is not None
+        snap = _DiskSnapshot(self.snapshot(), list(self._txn_revisions.items()))
+        payload = await anyio.to_thread.run_sync(encode, snap)
+        await self._durability.write_snapshot(snap.scene.revision, payload)
+        self._last_snapshot = snap.scene.revision
+
+    # ------------------------------------------------------------------ reads
+
+    @property
+    def revision(self) -> int:
+        return self.state.revision
+
+    def snapshot(self, revision: int | None = None) -> SnapshotReply:
+        """The scene now, or at an earlier ``revision`` still within the kept history."""
+        if revision is None or revision == self.state.revision:
+            return self.state.to_snapshot()
+        if revision > self.state.revision or revision < self.oldest_revision():
+            raise HistoryCompactedError(
+                f"revision {revision} is not available: the store keeps "
+                f"{self.oldest_revision()}..{self.state.revision}"
+            )
+        past = self.state.copy()
+        for entry in reversed(self._history):
+            if entry.change.revision <= revision:
+                break
+            for record in reversed(entry.undo):
+                past.undo(record)
+        past.revision = revision
+        return past.to_snapshot()
+
+    def oldest_revision(self) -> int:
+        """The oldest revision a snapshot or ``changes_since`` can start from."""
+        if not self._history:
+            return self.state.revision
+        return self._history[0].change.revision - 1
+
+    def changes_since(self, revision: int, limit: int = 0) -> ChangesReply:
+        if revision > self.state.revision:
+            raise ConflictError(
+                f"revision {revision} is ahead of the store ({self.state.revision})"
+            )
+        if revision < self.oldest_revision():
+            raise HistoryCompactedError(
+                f"changes after {revision} are no longer kept (oldest: {self.oldest_revision()}); "
+                "take a snapshot instead"
+            )
+        changes = [
+            e.change for e in self._history if revision < e.change.revision <= self._published
+        ]
+        if limit:
+            changes = changes[:limit]
+        return ChangesReply(revision=self._published, changes=changes)
+
+    def info(self) -> InfoReply:
+        return InfoReply(
+            revision=self.state.revision,
+            elements=len(self.state.elements),
+            relations=self.state.relation_count,
+            oldest_change=self.oldest_revision(),
+            durability=self.config.durability if self.config.data_dir else "memory",
+            data_dir=self.config.data_dir or "",
+            started_at=self.started_at,
+        )
