@@ -1,5 +1,5 @@
 """Wire schema of the device endpoints ``devices/<owner>/<device>/{cmd,state}`` (msgspec
-MessagePack; pure, no Zenoh).
+MessagePack; no I/O).
 
 Direction by direction::
 
@@ -8,19 +8,31 @@ Direction by direction::
     state             StateMessage, published at a modest rate (latest wins)
     progress_key      Progress{fraction}, while a command with progress runs
 
-``Command`` is a union tagged by ``cmd``; ``Reply`` and ``StateMessage`` by ``reply``. The
-in-process simulation queues the very same command Structs, so both transports mean the same.
-Messages only gain fields with defaults (an older client keeps working). An :class:`ErrorReply`
-carries the device-layer exception class name as ``code`` and its attributes in ``details``;
-:func:`error_from_reply` rebuilds the exception, so ``except GraspLostError`` works remotely.
+``Command`` is a union tagged by ``cmd``; ``Reply`` and ``StateMessage`` by ``reply``; every
+message is encoded with :func:`meshlink.rpc.encode`. The in-process simulation queues the very
+same command Structs, so both transports mean the same. Messages only gain fields with defaults
+(an older client keeps working).
+
+Errors follow :mod:`meshlink.rpc`, like every skimesh service. A device-layer error travels with
+its exception class name as ``code`` (``MotionTimeoutError``) and its attributes in ``details``;
+a request the server cannot read answers the standard :data:`~meshlink.rpc.BAD_REQUEST` or
+:data:`~meshlink.rpc.TOO_LARGE`, an unexpected exception :data:`~meshlink.rpc.INTERNAL`.
+:func:`error_from_reply` rebuilds the exception (standard codes as :class:`CommandError` and
+:class:`DeviceError`), so ``except GraspLostError`` works remotely.
+
+:class:`ErrorReply` is :class:`meshlink.rpc.ErrorReply` with ``details``, and this is the one
+change on the wire: it is now tagged (``"reply": "ErrorReply"``), so that an error is an
+``ErrorReply`` to any skimesh client, as it is for the other services. Older clients ignore the
+extra field; an untagged error from an older server still decodes (a lone Struct's tag is
+optional), and its codes (``CommandError``, ``DeviceError``) are class names as before.
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, TypeAlias
+from collections.abc import Callable
+from typing import Annotated, Any, Literal, TypeAlias, cast
 
-import msgspec
-from msgspec import Meta, Struct
+from msgspec import Meta, Struct, field
 
 from device_drivers import _errors as errors
 from device_drivers._interfaces import (
@@ -32,6 +44,8 @@ from device_drivers._interfaces import (
     Pose2D,
     WorldPose,
 )
+from meshlink import rpc
+from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, UNAVAILABLE, Decoder, WireError
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -65,7 +79,6 @@ __all__ = [
     "Stop",
     "decode_reply",
     "decode_request",
-    "encode",
     "error_from_reply",
     "error_reply",
 ]
@@ -217,64 +230,71 @@ class Progress(Struct, frozen=True):
     fraction: float
 
 
-class ErrorReply(Struct, frozen=True, kw_only=True):
-    """An error reply: ``code`` is the exception class name (``MotionTimeoutError``)."""
+class ErrorReply(rpc.ErrorReply, tag="ErrorReply", frozen=True, kw_only=True):
+    """An error reply: ``code`` is the exception class name (``MotionTimeoutError``) or a
+    standard code of :mod:`meshlink.rpc`; ``details`` the exception's attributes."""
 
-    code: str
-    message: str
-    details: dict[str, Any] = {}
-    schema_version: int = SCHEMA_VERSION
+    details: dict[str, Any] = field(default_factory=dict)
 
 
-_ENCODER = msgspec.msgpack.Encoder()
-_REQUEST = msgspec.msgpack.Decoder(Request)
-_REPLY = msgspec.msgpack.Decoder(Reply)
-_ERROR = msgspec.msgpack.Decoder(ErrorReply)
+_request: Decoder[Request] = Decoder(Request, what="request")
+_reply: Decoder[Reply] = Decoder(Reply, what="reply")
+_error: Decoder[ErrorReply] = Decoder(ErrorReply, what="error reply")
 _DETAILS = {
     "UnreachableError": ("position_error", "orientation_error", "iterations", "solver", "joints"),
     "SimulationDivergedError": ("time", "culprit", "field"),
 }
 
 
-def encode(message: object) -> bytes:
-    return _ENCODER.encode(message)
-
-
 def decode_request(payload: bytes) -> Request:
-    """Raises ``msgspec.ValidationError`` / ``DecodeError`` naming the bad field."""
-    return _REQUEST.decode(payload)
+    """Raises :class:`meshlink.rpc.WireError` naming the bad field (or the size)."""
+    return _request.decode(payload)
 
 
 def decode_reply(payload: bytes) -> Reply:
-    reply: Reply = _REPLY.decode(payload)
-    return reply
+    """Raises :class:`meshlink.rpc.WireError` for a payload that is no ``Reply``."""
+    return _reply.decode(payload)
 
 
 def error_reply(exc: BaseException) -> ErrorReply:
-    """The reply for ``exc``: device-layer errors keep their class and attributes; anything
-    else travels as ``DeviceError`` with its type in the message."""
+    """The reply the ``cmd`` queryable answers for ``exc``: a device-layer error keeps its class
+    name and attributes; a :class:`~meshlink.rpc.WireError` (a request that cannot be read) its
+    standard code; anything else is :data:`~meshlink.rpc.INTERNAL` with its type in the
+    message."""
     if isinstance(exc, errors.DeviceError):
         names = _DETAILS.get(type(exc).__name__, ())
         details = {n: getattr(exc, n) for n in names if hasattr(exc, n)}
         return ErrorReply(code=type(exc).__name__, message=str(exc), details=details)
-    if isinstance(exc, msgspec.ValidationError | msgspec.DecodeError):
-        return ErrorReply(code="CommandError", message=f"bad request: {exc}")
-    return ErrorReply(code="DeviceError", message=f"{type(exc).__name__}: {exc}")
+    if isinstance(exc, WireError):
+        return ErrorReply(code=exc.code, message=str(exc))
+    return ErrorReply(code=INTERNAL, message=f"{type(exc).__name__}: {exc}")
 
 
-def error_from_reply(payload: bytes) -> errors.DeviceError:
-    """The exception an error reply stands for (``DeviceUnavailableError`` for a payload that
-    is not an :class:`ErrorReply`, e.g. a server that stopped before answering)."""
-    try:
-        reply = _ERROR.decode(payload)
-    except (msgspec.ValidationError, msgspec.DecodeError):
-        text = payload.decode("utf-8", errors="replace")
-        return errors.DeviceUnavailableError(f"the device server failed: {text}")
+def _device_error(reply: rpc.ErrorReply) -> errors.DeviceError:
+    """The device-layer exception named by ``reply.code`` (``DeviceError`` for a name it does
+    not know), with the attributes in ``details``."""
     cls = getattr(errors, reply.code, None)
     if not (isinstance(cls, type) and issubclass(cls, errors.DeviceError)):
         cls = errors.DeviceError
     exc = cls.__new__(cls)
     Exception.__init__(exc, reply.message)
-    for name, value in reply.details.items():
+    for name, value in getattr(reply, "details", {}).items():
         setattr(exc, name, value)
     return exc
+
+
+_CODES: dict[str, Callable[[rpc.ErrorReply], errors.DeviceError]] = {
+    BAD_REQUEST: lambda r: errors.CommandError(r.message),
+    TOO_LARGE: lambda r: errors.CommandError(r.message),
+    INTERNAL: lambda r: errors.DeviceError(r.message),
+    UNAVAILABLE: lambda r: errors.DeviceUnavailableError(f"the device server failed: {r.message}"),
+}
+"""The standard codes of :mod:`meshlink.rpc` as device-layer exceptions; any other code is an
+exception class name (:func:`_device_error`)."""
+
+
+def error_from_reply(payload: bytes) -> errors.DeviceError:
+    """The exception an error reply stands for (``DeviceUnavailableError`` for a payload that
+    is not an :class:`ErrorReply`, e.g. a server that stopped before answering)."""
+    reply = rpc.decode_error(payload, _error)
+    return cast(errors.DeviceError, rpc.error_for(reply, _CODES, fallback=_device_error))

@@ -22,6 +22,8 @@ __all__ = ["FastPacing", "Pacing", "RealTimePacing"]
 
 
 class Pacing(Protocol):
+    """When the runner's next batch runs, and how long it is."""
+
     async def next_batch(self) -> tuple[int, bool]:
         """Wait until the next batch is due; return its ticks and whether it takes the jobs
         queued so far."""

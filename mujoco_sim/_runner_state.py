@@ -1,11 +1,12 @@
 """The state of a running :class:`~mujoco_sim.SimWorld`, by the thread that owns it.
 
-:class:`LoopState` is written only on the event loop; the simulation thread reads a few of its
-fields between batches or ticks (``inbox``, ``next_alarm``, ``reporting``, ``calls``: single
-reads, atomic under the GIL), which is why they are plain attributes. :class:`ThreadState` is
-written only in the simulation thread during a batch; the loop reads ``latest`` (one
-reference, atomic) and resets ``acks`` and ``woken`` only between thread calls, when the
-simulation thread is not running.
+:class:`LoopState` is written only on the event loop, with one exception: during a fast run
+the simulation thread takes the jobs queued in ``inbox`` (a deque: appends and pops are
+thread-safe). Between batches or ticks it also reads ``next_alarm``, ``reporting``, ``calls``
+and copies ``alarms`` (single reads, atomic under the GIL), which is why they are plain
+attributes. :class:`ThreadState` is written only in the simulation thread during a thread
+call; the loop reads ``latest`` (one reference, atomic) and resets the other fields only
+between thread calls, when the simulation thread is not running.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ class LoopState:
     )
 
     def __init__(self, snapshot: Snapshot) -> None:
-        self.inbox: deque[Job] = deque()  # popped by the runner before each batch
+        self.inbox: deque[Job] = deque()  # taken by each batch (by the thread in a fast run)
         self.waiting: set[Job] = set()
         self.snapshot = snapshot  # the last one delivered
         self.failure: BaseException | None = None

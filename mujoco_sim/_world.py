@@ -47,12 +47,14 @@ loop two kinds of news:
   the last one delivered with an event), and the next batch starts at once: no post, no
   wake-up of the loop, no waiting. Readers on the loop see the newest snapshot there is.
 
-What this saves (see docs/benchmarks.md, section Simulation): the loop's
-wake-up per batch and the simulation's wait for it (each as much wall time as the physics of
-a batch of a small scene on a busy machine), while the loop still
-reacts to the simulation in lock-step. The loop does not step with the simulation
-between events: a task that polls the snapshot (rather than awaiting an event or an alarm)
-sees the simulation go on in steps of whatever it ran meanwhile, as it would in real time.
+What this saves is the loop's wake-up per batch and the simulation's wait for it (the figures
+are in docs/benchmarks.md, section Simulation), while the loop still reacts to the simulation
+in lock-step. The loop does not step with the simulation between events: a task that polls
+the snapshot (rather than awaiting an event or an alarm) sees the simulation go on in steps of
+whatever it ran meanwhile, as it would in real time.
+
+Backend: asyncio only (anyio's asyncio backend, as meshlink), since a fast run posts to the
+running asyncio loop from the simulation thread.
 
 Failure: a diverged state (or any error inside a batch) stops the world; every waiting and
 later command fails with that error.
@@ -61,7 +63,6 @@ later command fails with that error.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import math
 import threading
@@ -165,7 +166,7 @@ class SimWorld:
         self._limiter = anyio.CapacityLimiter(1)
         self._on_loop = LoopState(self.plant.snapshot)
         self._in_thread = ThreadState(self.plant.snapshot)
-        self._loop: asyncio.AbstractEventLoop | None = None  # fast runs on asyncio only
+        self._loop: asyncio.AbstractEventLoop | None = None  # the running loop, in a fast run
         self._post: LoopPost | None = None  # how _report hands over (see loop_post)
         self._ik = WorldIK(scenario)
         if recorder is not None:  # still in the constructing thread: nothing steps yet
@@ -240,22 +241,19 @@ class SimWorld:
 
     def _batch_runner(self) -> Callable[[int, list[Job]], Batch]:
         """What one thread call runs: one batch, or in fast mode with a ``fast_handover`` a
-        fast run of batches back to back (see module doc). Finished jobs and due alarms are
-        posted to the loop during a fast run on asyncio only; on another backend they end
-        the run."""
+        fast run of batches back to back, which posts finished jobs and due alarms to the loop
+        as they happen (see module doc)."""
         o, plant = self.options, self.plant
         if not (o.fast and o.fast_handover > 0):
             return plant.run_batch
-        report = None
-        with contextlib.suppress(RuntimeError):  # no asyncio loop: another backend
-            self._loop, report = asyncio.get_running_loop(), self._report
-            self._post = loop_post(self._loop)
+        self._loop = asyncio.get_running_loop()
+        self._post = loop_post(self._loop)
         return partial(
             plant.run_batch,
             inbox=self._on_loop.inbox,
             until=self._between_batches,
             budget=o.fast_handover,
-            report=report,
+            report=self._report,
             wake=self._wake,
         )
 
@@ -266,8 +264,8 @@ class SimWorld:
     def _between_batches(self, sim_time: float) -> bool:
         """Simulation thread, between the batches of a fast run: wait until the loop has
         dealt with what was reported during the last batch, then say whether the run must
-        return (a job reports progress, a :meth:`call` waits, the world is being stopped;
-        an alarm is due, unless reported: see :meth:`_wake`)."""
+        return: a job reports progress, a :meth:`call` waits, or the world is being stopped
+        (a due alarm does not end it: it is reported, see :meth:`_wake`)."""
         for ack in self._in_thread.acks:
             if not ack.wait(_ACK_WAIT):
                 _log.warning("the event loop took over %g s to take a batch", _ACK_WAIT)
@@ -278,12 +276,10 @@ class SimWorld:
             if isinstance(exc, Exception):
                 raise
             return True
-        due = self._loop is None and sim_time >= self._on_loop.next_alarm
-        if due or self._on_loop.reporting > 0 or self._on_loop.calls > 0:
+        if self._on_loop.reporting > 0 or self._on_loop.calls > 0:
             return True
-        self._in_thread.ticks_left = (
-            self._in_thread.batch_ticks
-        )  # another batch of as many ticks follows
+        # another batch of as many ticks follows
+        self._in_thread.ticks_left = self._in_thread.batch_ticks
         return False
 
     def _wake(self, sim_time: float) -> bool:

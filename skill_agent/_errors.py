@@ -20,7 +20,7 @@ Hierarchy::
     ├── SkillFailure               raised by skill code: the skill could not do its job
     ├── NoGraspError               no grasp fits the object (skill_agent.primitives; the skills
     │                              that plan grasps turn it into a failed run)
-    ├── BadRequestError            bytes that are no valid request (garbage, unknown tag, types)
+    ├── BadRequestError            no valid request (garbage, unknown tag, types, too large)
     ├── AgentInternalError         the agent failed unexpectedly while answering (a bug; logged)
     ├── AgentTransportError        the agent cannot be reached
     └── RemoteSkillError           the agent answered with an error (keeps its code)
@@ -35,9 +35,22 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from meshlink import rpc
+from meshlink.rpc import (
+    BAD_REQUEST,
+    INTERNAL,
+    TOO_LARGE,
+    UNAVAILABLE,
+    Decoder,
+    ErrorFactory,
+    decode_error,
+    error_for,
+)
+from skill_agent.protocol._runs import ErrorReply
 from skill_agent.protocol._skills import ParamState
 
 __all__ = [
+    "AGENT_CODES",
     "AgentInternalError",
     "AgentTransportError",
     "BadRequestError",
@@ -55,7 +68,7 @@ __all__ = [
     "UnknownRunError",
     "UnknownSkillError",
     "UnspecifiedParameterError",
-    "error_for_code",
+    "error_for_reply",
     "leaves",
 ]
 
@@ -123,11 +136,11 @@ class SkillFailure(SkillError):
 
 
 class BadRequestError(SkillError):
-    code = "bad_request"
+    code = BAD_REQUEST
 
 
 class AgentInternalError(SkillError):
-    code = "internal"
+    code = INTERNAL
 
 
 class AgentTransportError(SkillError):
@@ -166,17 +179,36 @@ _BY_CODE: dict[str, type[SkillError]] = {
 }
 
 
-def error_for_code(
-    code: str, message: str, param_states: Mapping[str, ParamState] | None = None
-) -> SkillError:
-    """The local exception for an error code received from an agent (a ParameterError with
-    the ``param_states`` the reply carried)."""
-    cls = _BY_CODE.get(code)
-    if cls is None:
-        return RemoteSkillError(code, message)
+def _rebuild(cls: type[SkillError]) -> ErrorFactory:
     if issubclass(cls, ParameterError):
-        return cls(message, param_states=param_states)
-    return cls(message)
+        return lambda r: cls(r.message, param_states=getattr(r, "param_states", None))
+    return lambda r: cls(r.message)
+
+
+AGENT_CODES: dict[str, ErrorFactory] = {
+    **{code: _rebuild(cls) for code, cls in _BY_CODE.items()},
+    TOO_LARGE: _rebuild(BadRequestError),
+    UNAVAILABLE: lambda r: RemoteSkillError("remote_error", r.message),
+}
+"""Error code -> the local exception, for :func:`meshlink.rpc.error_for` (a ParameterError
+with the ``param_states`` the reply carried). The standard codes: ``bad_request`` and
+``too_large`` give :class:`BadRequestError`, ``internal`` :class:`AgentInternalError`; an
+error payload that is no ErrorReply (``unavailable``) a :class:`RemoteSkillError` with code
+``remote_error``; an unknown code: see :func:`error_for_reply`."""
+
+_error_reply: Decoder[ErrorReply] = Decoder(ErrorReply, what="error reply")
+
+
+def error_for_reply(error: rpc.ErrorReply | bytes) -> SkillError:
+    """The local exception for an agent's error reply, or for an error reply's payload (a
+    :class:`RemoteSkillError` that keeps an unknown code)."""
+    reply = decode_error(error, _error_reply) if isinstance(error, bytes) else error
+    found = error_for(reply, AGENT_CODES, fallback=_unknown_code)
+    return found if isinstance(found, SkillError) else _unknown_code(reply)
+
+
+def _unknown_code(error: rpc.ErrorReply) -> RemoteSkillError:
+    return RemoteSkillError(error.code, error.message)
 
 
 def leaves(exc: BaseException) -> list[BaseException]:

@@ -41,6 +41,7 @@ from ._errors import TaskError as TaskError
 from ._errors import TaskTransportError as TaskTransportError
 from ._errors import UnsolvableError as UnsolvableError
 from ._errors import VerificationError as VerificationError
+from ._goal_text import parse_goal as parse_goal
 from ._goals import Goal as Goal
 from ._goals import GoalLiteral as GoalLiteral
 from ._goals import PropertyGoal as PropertyGoal
@@ -48,7 +49,6 @@ from ._goals import RelationGoal as RelationGoal
 from ._goals import check_goal as check_goal
 from ._goals import goal_from_conditions as goal_from_conditions
 from ._goals import literal_atom as literal_atom
-from ._goals import parse_goal as parse_goal
 
 if TYPE_CHECKING:
     from ._client import OperatorClient as OperatorClient

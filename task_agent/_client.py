@@ -28,22 +28,20 @@ from contextlib import asynccontextmanager
 from typing import TypeVar
 
 import anyio
-import msgspec
 
 from meshlink import KeySpace, Mesh, MeshlinkError, NoReplyError, RemoteError, Sample, Subscription
+from meshlink.rpc import ErrorReply, WireError, encode, error_for
 
 from ._errors import (
+    TASK_CODES,
     FileRefusedError,
-    RemoteTaskError,
-    TaskError,
     TaskTransportError,
-    error_for_code,
+    remote_task_error,
 )
 from ._goals import Goal
 from .protocol import (
     AbortTask,
     AnswerPending,
-    ErrorReply,
     ListPending,
     ListTasks,
     OkReply,
@@ -67,7 +65,6 @@ from .protocol import (
     decode_event,
     decode_operator_reply,
     decode_reply,
-    encode,
 )
 
 __all__ = [
@@ -81,7 +78,6 @@ __all__ = [
 _log = logging.getLogger(__name__)
 R = TypeVar("R")
 EventCallback = Callable[[TaskEvent], object]
-_error_decoder = msgspec.msgpack.Decoder(ErrorReply)
 
 
 def operator_rpc_key(keys: KeySpace) -> str:
@@ -94,15 +90,9 @@ def new_task_id() -> str:
     return f"t-{uuid.uuid4().hex[:10]}"
 
 
-def _remote_error(payload: bytes) -> TaskError:
-    try:
-        error = _error_decoder.decode(payload)
-    except msgspec.MsgspecError:
-        return TaskTransportError(payload.decode("utf-8", errors="replace"))
-    cls = error_for_code(error.code)
-    if cls is TaskError and error.code != TaskError.code:
-        return RemoteTaskError(error.code, error.message)
-    return cls(error.message)
+def _remote_error(payload: bytes) -> Exception:
+    """The exception for an error reply's payload (see the module doc)."""
+    return error_for(payload, TASK_CODES, fallback=remote_task_error)
 
 
 class TaskClient:
@@ -136,7 +126,7 @@ class TaskClient:
             raise TaskTransportError(f"task agent: {e}") from e
         try:
             return decode_reply(data)
-        except msgspec.MsgspecError as e:
+        except WireError as e:
             raise TaskTransportError(f"undecodable reply from the task agent: {e}") from e
 
     async def _expect(self, request: TaskRequest, kind: type[R], timeout: float | None = None) -> R:
@@ -226,7 +216,7 @@ class TaskClient:
                 continue
             try:
                 event = decode_event(sample.payload)
-            except msgspec.MsgspecError as e:
+            except WireError as e:
                 _log.warning("undecodable event of task %s: %s", task_id, e)
                 continue
             silent_since = anyio.current_time()
@@ -321,10 +311,10 @@ class OperatorClient:
                 f"no operator agent answered on {key} within {self.timeout:g} s (it runs inside "
                 "`skimesh task-agent` unless started with --no-operator)"
             ) from None
-        except (MeshlinkError, msgspec.MsgspecError) as e:
+        except MeshlinkError as e:  # WireError too: an undecodable reply
             raise TaskTransportError(f"operator agent: {e}") from e
         if isinstance(reply, ErrorReply):  # pragma: no cover - errors come as error replies
-            raise RemoteTaskError(reply.code, reply.message)
+            raise error_for(reply, TASK_CODES, fallback=remote_task_error)
         return reply
 
     async def pending(self) -> list[PendingStep]:

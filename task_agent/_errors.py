@@ -26,7 +26,8 @@ Hierarchy::
     └── TaskTransportError       the task agent cannot be reached, stopped answering, or sent
                                  garbage
 
-Each class has a stable ``code`` for the wire (the task service's error replies).
+Each class has a stable ``code`` for the wire (the task service's error replies);
+:data:`TASK_CODES` turns an error reply back into its class (clients).
 """
 
 from __future__ import annotations
@@ -34,10 +35,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from meshlink.rpc import UNAVAILABLE, ErrorFactory, ErrorReply
+
 if TYPE_CHECKING:
     from .protocol import VerifyProblem
 
 __all__ = [
+    "TASK_CODES",
     "DiscoveryError",
     "DomainError",
     "FileRefusedError",
@@ -51,7 +55,7 @@ __all__ = [
     "TaskTransportError",
     "UnsolvableError",
     "VerificationError",
-    "error_for_code",
+    "remote_task_error",
 ]
 
 
@@ -122,11 +126,6 @@ _BY_CODE: dict[str, type[TaskError]] = {
 }
 
 
-def error_for_code(code: str) -> type[TaskError]:
-    """The class for a wire ``code`` (:class:`TaskError` for an unknown one)."""
-    return _BY_CODE.get(code, TaskError)
-
-
 class FileRefusedError(VerificationError):
     """A submitted task file failed verification; ``problems`` says why."""
 
@@ -160,3 +159,25 @@ class TaskTransportError(TaskError):
     """The task agent cannot be reached, stopped answering, or sent garbage."""
 
     code = "transport"
+
+
+def _with_message(cls: type[TaskError]) -> ErrorFactory:
+    def factory(reply: ErrorReply) -> TaskError:
+        return cls(reply.message)
+
+    return factory
+
+
+TASK_CODES: dict[str, ErrorFactory] = {
+    **{code: _with_message(cls) for code, cls in _BY_CODE.items()},
+    UNAVAILABLE: lambda reply: TaskTransportError(reply.message),
+}
+"""Error reply code -> the exception a client raises (``unavailable``: the error payload was
+no ErrorReply, e.g. plain text from a server that stopped). Other codes (the standard
+``bad_request``, ``too_large``, ``internal``, and ``task_exists``, ``unknown_task``, ...)
+raise :func:`remote_task_error`'s :class:`RemoteTaskError`, which keeps the code."""
+
+
+def remote_task_error(reply: ErrorReply) -> TaskError:
+    """The fallback of :data:`TASK_CODES`: :class:`RemoteTaskError` with the reply's code."""
+    return RemoteTaskError(reply.code, reply.message)

@@ -14,11 +14,13 @@ tagged (``request``, ``reply``, ``event``, ``block``); messages only gain fields
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, TypeAlias
+from typing import Annotated, Literal, TypeAlias
 
-import msgspec
 from msgspec import Meta, Struct
 
+from meshlink.rpc import Decoder
+from meshlink.rpc import ErrorReply as ErrorReply
+from meshlink.rpc import encode as encode
 from wm_store.protocol import Value
 
 from ._goals import Goal
@@ -28,7 +30,6 @@ __all__ = [
     "AbortTask",
     "AnswerPending",
     "Call",
-    "ErrorReply",
     "ListPending",
     "ListTasks",
     "OkReply",
@@ -68,7 +69,6 @@ __all__ = [
     "decode_operator_request",
     "decode_reply",
     "decode_request",
-    "encode",
 ]
 
 SCHEMA_VERSION = 1
@@ -326,12 +326,6 @@ class OkReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
-class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
-    code: str
-    message: str
-    schema_version: int = SCHEMA_VERSION
-
-
 TaskReply: TypeAlias = TaskAccepted | TasksReply | VerifyReply | OkReply | ErrorReply
 
 # --------------------------------------------------------------------------- operator
@@ -390,34 +384,31 @@ OperatorRequest: TypeAlias = ListPending | AnswerPending
 OperatorReply: TypeAlias = PendingReply | OkReply | ErrorReply
 
 # --------------------------------------------------------------------------- codecs
+# ``encode`` and ``ErrorReply`` are :mod:`meshlink.rpc`'s (the task service speaks the shared
+# RPC wire); every ``decode_*`` raises only :class:`meshlink.rpc.WireError`.
 
-_encoder = msgspec.msgpack.Encoder()
-_request_decoder = msgspec.msgpack.Decoder(TaskRequest)
-_reply_decoder = msgspec.msgpack.Decoder(TaskReply)
-_event_decoder = msgspec.msgpack.Decoder(TaskEvent)
-_operator_request_decoder = msgspec.msgpack.Decoder(OperatorRequest)
-_operator_reply_decoder = msgspec.msgpack.Decoder(OperatorReply)
-
-
-def encode(message: Any) -> bytes:
-    return _encoder.encode(message)
+_request: Decoder[TaskRequest] = Decoder(TaskRequest, what="request")
+_reply: Decoder[TaskReply] = Decoder(TaskReply, what="reply")
+_event: Decoder[TaskEvent] = Decoder(TaskEvent, what="task event")
+_operator_request: Decoder[OperatorRequest] = Decoder(OperatorRequest, what="operator request")
+_operator_reply: Decoder[OperatorReply] = Decoder(OperatorReply, what="operator reply")
 
 
 def decode_request(data: bytes) -> TaskRequest:
-    return _request_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+    return _request.decode(data)
 
 
 def decode_reply(data: bytes) -> TaskReply:
-    return _reply_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+    return _reply.decode(data)
 
 
 def decode_event(data: bytes) -> TaskEvent:
-    return _event_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+    return _event.decode(data)
 
 
 def decode_operator_request(data: bytes) -> OperatorRequest:
-    return _operator_request_decoder.decode(data)  # type: ignore[no-any-return]  # untyped union
+    return _operator_request.decode(data)
 
 
 def decode_operator_reply(data: bytes) -> OperatorReply:
-    return _operator_reply_decoder.decode(data)  # type: ignore[no-any-return]  # untyped union
+    return _operator_reply.decode(data)

@@ -22,11 +22,13 @@ Requests:
   kept); ``AbortTask`` stops every run of the task and answers once it ended (or after
   ``abort_wait`` seconds).
 
-Refusals are error replies carrying ``ErrorReply{code, message}``: ``bad_request``
-(undecodable, a task id that is no key segment, operator fallback for a skill no registered
-agent offers), ``task_exists``, ``unknown_task``, ``goal_parse``, ``verification``,
-``internal``. Nothing malformed crashes the service or changes its state. Nothing blocks the
-loop: planning solves in a worker thread (the planner's limiter).
+Refusals are error replies carrying ``ErrorReply{code, message}`` (:mod:`meshlink.rpc`, which
+decodes, dispatches and encodes): the standard ``bad_request`` (malformed bytes of any kind, a
+task id that is no key segment, operator fallback for a skill no registered agent offers),
+``too_large`` (a request over ``max_request_bytes``) and ``internal``, and the service's
+``task_exists``, ``unknown_task``, ``goal_parse``, ``verification``. Nothing malformed crashes
+the service or changes its state. Nothing blocks the loop: planning solves in a worker thread
+(the planner's limiter).
 """
 
 from __future__ import annotations
@@ -38,20 +40,28 @@ from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 
 import anyio
-import msgspec
 from anyio.abc import TaskGroup, TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh, MeshlinkError, check_name
+from meshlink import Mesh, MeshlinkError, check_name
+from meshlink.rpc import (
+    BAD_REQUEST,
+    DEFAULT_MAX_REQUEST_BYTES,
+    INTERNAL,
+    ErrorReply,
+    RequestHandler,
+    coded_errors,
+    encode,
+)
 from wm_store import WmClient
 
 from ._errors import RequestError, TaskError, VerificationError
-from ._goals import check_goal, parse_goal
+from ._goal_text import parse_goal
+from ._goals import check_goal
 from .discovery import Discovery
 from .execution import Executor, PlanSource, RunWrites, SkillRunner, WorldModel, ZenohRunner
 from .operator import serve_operator
 from .protocol import (
     AbortTask,
-    ErrorReply,
     ListTasks,
     OkReply,
     SubmitFile,
@@ -67,8 +77,6 @@ from .protocol import (
     VerifyFile,
     VerifyProblem,
     VerifyReply,
-    decode_request,
-    encode,
 )
 from .protocol import (
     TaskStatus as TaskStatusRequest,
@@ -80,6 +88,15 @@ __all__ = ["TaskService", "serve_tasks"]
 
 _log = logging.getLogger(__name__)
 PlannerFactory = Callable[[TaskOptions], PlanSource]
+_task_errors = coded_errors(TaskError)
+
+
+def _to_reply(exc: Exception) -> ErrorReply | None:
+    """The service's refusals: a :class:`TaskError` answers its code; a ``ValueError`` (a task
+    id that is no key segment) answers ``bad_request`` with its own text."""
+    if isinstance(exc, ValueError):
+        return ErrorReply(code=BAD_REQUEST, message=str(exc))
+    return _task_errors(exc)
 
 
 def default_planners() -> PlannerFactory:
@@ -113,6 +130,7 @@ class TaskService:
         keep_finished: int = 256,
         abort_wait: float = 10.0,
         writes: RunWrites | None = None,
+        max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
     ) -> None:
         self.wm = wm
         self.writes = writes
@@ -126,6 +144,15 @@ class TaskService:
         self.abort_wait = abort_wait
         self._tasks: OrderedDict[str, tuple[Executor, anyio.Event]] = OrderedDict()
         self._tg: TaskGroup | None = None
+        self.rpc: RequestHandler[TaskRequest, TaskReply] = RequestHandler(
+            TaskRequest,
+            self.handle,
+            errors=_to_reply,
+            max_request_bytes=max_request_bytes,
+            name="tasks/rpc",
+        )
+        """``tasks/rpc``: bytes -> :meth:`handle` -> bytes (:meth:`RequestHandler.serve_on
+        <meshlink.rpc.RequestHandler.serve_on>` serves it)."""
 
     async def run(self, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED) -> None:
         """Host the tasks until cancelled; cancelling aborts every running task (their runs
@@ -145,20 +172,9 @@ class TaskService:
     # ------------------------------------------------------------------ requests
 
     async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
-        """Decode, dispatch, encode. Returns ``(payload, ok)``; never raises an Exception."""
-        try:
-            request = decode_request(data)
-        except msgspec.MsgspecError as e:
-            return encode(ErrorReply(code="bad_request", message=f"undecodable: {e}")), False
-        try:
-            return encode(await self.handle(request)), True
-        except TaskError as e:
-            return encode(ErrorReply(code=e.code, message=str(e))), False
-        except ValueError as e:  # a task id that is no key segment
-            return encode(ErrorReply(code="bad_request", message=str(e))), False
-        except Exception as e:
-            _log.exception("request %s failed", type(request).__name__)
-            return encode(ErrorReply(code="internal", message=f"{type(e).__name__}: {e}")), False
+        """Decode, dispatch, encode (:attr:`rpc`). Returns ``(payload, ok)``; never raises an
+        Exception."""
+        return await self.rpc.handle_bytes(data)
 
     async def handle(self, request: TaskRequest) -> TaskReply:
         """Answer one request; refusals raise :class:`TaskError` subclasses."""
@@ -194,13 +210,13 @@ class TaskService:
                 return TasksReply(tasks=self.tasks(active_only=active_only))
             case AbortTask(task_id=task_id, reason=reason):
                 return await self._abort(task_id, reason)
-        raise RequestError("bad_request", f"unsupported request {type(request).__name__}")
+        raise RequestError(BAD_REQUEST, f"unsupported request {type(request).__name__}")
 
     # ------------------------------------------------------------------ registry
 
     def _new(self, task_id: str, options: TaskOptions) -> Executor:
         if self._tg is None:
-            raise RequestError("internal", "the task service is not running")
+            raise RequestError(INTERNAL, "the task service is not running")
         task_id = check_name(task_id, "task id") if task_id else f"t-{uuid.uuid4().hex[:10]}"
         if task_id in self._tasks:
             raise RequestError("task_exists", f"task {task_id!r} exists; choose another id")
@@ -208,7 +224,7 @@ class TaskService:
         offered = sorted({s.name for a in agents for s in a.skills})
         if unknown := ", ".join(sorted(options.operator_fallback_skills - set(offered))):
             why = f"no registered agent offers {unknown} (skills: {', '.join(offered) or 'none'})"
-            raise RequestError("bad_request", f"operator fallback: {why}")
+            raise RequestError(BAD_REQUEST, f"operator fallback: {why}")
         return Executor(
             task_id=task_id,
             wm=self.wm,
@@ -288,10 +304,6 @@ async def serve_tasks(
         writes=writes,
     )
 
-    async def rpc(query: IncomingQuery) -> list[Answer]:
-        data, ok = await service.handle_bytes(query.payload or b"")
-        return [Answer(key=keys.tasks_rpc(), payload=data, ok=ok)]
-
     async with anyio.create_task_group() as tg:
         await tg.start(discovery.watch, mesh)
         await tg.start(writes.follow, mesh)  # agents/*/events: each step's world-model writes
@@ -300,7 +312,7 @@ async def serve_tasks(
                 functools.partial(serve_operator, mesh, wm, name=operator, discovery=discovery)
             )
         await tg.start(service.run)
-        await tg.start(mesh.serve, keys.tasks_rpc(), rpc)
+        await tg.start(mesh.serve, keys.tasks_rpc(), service.rpc.serve_on(keys.tasks_rpc()))
         _log.warning(
             "task agent ready on mesh %r: %d agents available (%s)%s",
             keys.mesh,

@@ -22,8 +22,10 @@ adapters last)::
     durability   write-ahead log, snapshots, group commit
     server       the authoritative store, request -> reply dispatch, its Zenoh serving
 
-Only the adapters import ``meshlink``: ``_zenoh_transport`` (:class:`ZenohTransport`) and
+Only the adapters talk to the network: ``_zenoh_transport`` (:class:`ZenohTransport`) and
 ``server/_zenoh``, ``server/_presence`` (:func:`~wm_store.server.serve_store`, agent presence).
+The core uses only :mod:`meshlink.rpc`, which opens no session: the error reply every service
+speaks, request decoding and handling, and raising an error reply by its code.
 """
 
 from ._client import WmClient as WmClient

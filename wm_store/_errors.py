@@ -17,7 +17,8 @@ Hierarchy::
     │   ├── ElementNotFoundError       no element with that id
     │   ├── DuplicateIdError           an explicit id that is taken or was used before
     │   └── ConflictError              compare-and-set failed: the element or store moved on
-    ├── ProtocolError                  bytes that do not decode to a request/reply of this schema
+    ├── ProtocolError                  bytes that do not decode to a request/reply of this schema,
+    │                                  or a request over the size limit
     ├── HistoryCompactedError          changes-since asked for revisions no longer kept
     ├── StorageError                   the durable log or a snapshot cannot be read or written
     │   └── CorruptLogError            a record in the middle of the log fails its CRC
@@ -26,13 +27,21 @@ Hierarchy::
     │                                  ``TimeoutError``)
     └── RemoteError                    the store answered with an error (keeps its code)
 
-Each error has a stable ``code`` (used on the wire in :class:`wm_store.protocol.ErrorReply`), and
-messages say what to do where that is known.
+Each error has a stable ``code`` (used on the wire in :class:`meshlink.rpc.ErrorReply`), and
+messages say what to do where that is known. The store answers malformed and oversized requests
+with meshlink's standard codes ``bad_request`` and ``too_large``, which the client raises as
+:class:`ProtocolError` (:data:`WM_CODES`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
+from meshlink.rpc import BAD_REQUEST, TOO_LARGE, UNAVAILABLE
+
 __all__ = [
+    "WM_CODES",
     "CardinalityError",
     "ConflictError",
     "CorruptLogError",
@@ -54,7 +63,7 @@ __all__ = [
     "UnknownTemplateError",
     "ValidationError",
     "WmError",
-    "error_for_code",
+    "remote_error",
 ]
 
 
@@ -181,13 +190,29 @@ _BY_CODE: dict[str, type[WmError]] = {
 }
 
 
-def error_for_code(code: str, message: str) -> WmError:
-    """Rebuild the local exception for an error code received from the store.
+def _from_message(cls: type[WmError]) -> Callable[[Any], WmError]:
+    def factory(reply: Any) -> WmError:
+        return cls(reply.message)
 
-    Known codes give their own class (so ``except ConflictError`` works across the wire);
-    unknown codes give a :class:`RemoteError` that keeps the code.
-    """
-    cls = _BY_CODE.get(code)
-    if cls is None:
-        return RemoteError(code, message)
-    return cls(message)
+    return factory
+
+
+def _too_large(reply: Any) -> WmError:
+    return ProtocolError(f"{reply.message}; split the transaction")
+
+
+WM_CODES: dict[str, Callable[[Any], WmError]] = {
+    **{code: _from_message(cls) for code, cls in _BY_CODE.items()},
+    BAD_REQUEST: _from_message(ProtocolError),
+    TOO_LARGE: _too_large,
+    UNAVAILABLE: _from_message(TransportError),
+}
+"""Error code -> the local exception, for :func:`meshlink.rpc.raise_for_error`: each
+:class:`WmError` code gives its own class (so ``except ConflictError`` works across the wire),
+meshlink's ``bad_request`` and ``too_large`` a :class:`ProtocolError`. Other codes
+(``internal``, a newer store's) give a :class:`RemoteError` through :func:`remote_error`."""
+
+
+def remote_error(reply: Any) -> WmError:
+    """A :class:`RemoteError` keeping the code of an error reply :data:`WM_CODES` does not map."""
+    return RemoteError(reply.code, reply.message)

@@ -22,16 +22,10 @@ from typing import Protocol
 
 import anyio
 
-from wm_store._errors import error_for_code
-from wm_store.protocol import (
-    Change,
-    ErrorReply,
-    Reply,
-    Request,
-    decode_change,
-    decode_reply,
-    encode,
-)
+from meshlink.rpc import encode
+from meshlink.rpc import raise_for_error as raise_remote_error
+from wm_store._errors import WM_CODES, remote_error
+from wm_store.protocol import Change, Reply, Request, decode_change, decode_reply
 from wm_store.server import WmService
 
 __all__ = ["InMemoryTransport", "WmTransport", "raise_for_error"]
@@ -43,7 +37,7 @@ class WmTransport(Protocol):
     """What the client needs from a transport."""
 
     async def request(self, request: Request, *, timeout: float) -> Reply:
-        """Send one request and return the reply (an :class:`ErrorReply` is returned as is)."""
+        """Send one request and return the reply (an error reply is returned as is)."""
         ...
 
     def changes(self) -> AbstractAsyncContextManager[AsyncIterator[Change]]:
@@ -52,9 +46,9 @@ class WmTransport(Protocol):
 
 
 def raise_for_error(reply: Reply) -> Reply:
-    """Raise the local exception for an :class:`ErrorReply`; return any other reply."""
-    if isinstance(reply, ErrorReply):
-        raise error_for_code(reply.code, reply.message)
+    """Raise the local exception for an :class:`~meshlink.rpc.ErrorReply` (by its code,
+    :data:`~wm_store._errors.WM_CODES`); return any other reply."""
+    raise_remote_error(reply, WM_CODES, fallback=remote_error)
     return reply
 
 

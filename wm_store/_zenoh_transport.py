@@ -12,12 +12,11 @@ import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-import msgspec
-
 from meshlink import Mesh, MeshlinkError, NoReplyError
 from meshlink import RemoteError as MeshRemoteError
+from meshlink.rpc import WireError, encode
 from wm_store._errors import ProtocolError, TransportError
-from wm_store.protocol import Change, Reply, Request, Transact, decode_change, decode_reply, encode
+from wm_store.protocol import Change, Reply, Request, Transact, decode_change, decode_reply
 
 __all__ = ["ZenohTransport"]
 
@@ -46,7 +45,7 @@ class ZenohTransport:
             raise TransportError(str(exc)) from exc
         try:
             return decode_reply(data)
-        except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+        except WireError as exc:
             raise ProtocolError(f"undecodable reply from the store: {exc}") from exc
 
     @asynccontextmanager
@@ -60,7 +59,7 @@ async def _decode_changes(samples: AsyncIterator[object]) -> AsyncIterator[Chang
         payload = getattr(sample, "payload", b"")
         try:
             change = decode_change(payload)
-        except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+        except WireError as exc:
             # A change we cannot read is a gap: the replica resyncs on the next revision.
             _log.warning("skipped an undecodable change: %s", exc)
             continue

@@ -36,6 +36,7 @@ from device_drivers._interfaces import (
     WorldPose,
 )
 from meshlink import Mesh, NoReplyError, RemoteError, check_name
+from meshlink.rpc import WireError, encode
 
 __all__ = [
     "RemoteAppliance",
@@ -110,7 +111,7 @@ class RemoteDevice:
 
     async def _send(self, request: p.Request, timeout: float) -> p.Reply:
         try:
-            payload = await self._mesh.request(self._cmd, p.encode(request), timeout=timeout)
+            payload = await self._mesh.request(self._cmd, encode(request), timeout=timeout)
         except RemoteError as exc:
             raise p.error_from_reply(exc.payload) from None
         except NoReplyError as exc:
@@ -127,7 +128,7 @@ class RemoteDevice:
             raise
         try:
             return p.decode_reply(payload)
-        except (msgspec.ValidationError, msgspec.DecodeError) as exc:
+        except WireError as exc:
             raise DeviceError(f"{self._label}: unreadable reply ({exc})") from None
 
     async def _state(self, kind: type[msgspec.Struct]) -> object:
@@ -252,7 +253,7 @@ async def connect_devices(
     if owner != "*":
         check_name(owner, "device owner")
     selector = f"{mesh.keys.prefix}/devices/{owner}/*/cmd"
-    replies = await mesh.get(selector, p.encode(p.Request(command=p.Describe())), timeout=timeout)
+    replies = await mesh.get(selector, encode(p.Request(command=p.Describe())), timeout=timeout)
     found: dict[DeviceKey, Device] = {}
     for reply in replies:
         if not reply.ok:

@@ -7,8 +7,11 @@ proxies elsewhere can use them with the same interface:
 - ``cmd`` (queryable): a :class:`~device_drivers.protocol.Request`, answered once the
   command is done (a motion replies when it has finished) with a ``Reply``, or with an
   :class:`~device_drivers.protocol.ErrorReply` as a Zenoh error reply. Each query runs in
-  its own task (meshlink), so a ``Stop`` overtakes a running motion. A malformed request gets
-  a ``CommandError`` reply; nothing moves.
+  its own task (meshlink), so a ``Stop`` overtakes a running motion. The queryable is a
+  :class:`meshlink.rpc.RequestHandler`: a request that cannot be read (malformed, or longer
+  than ``max_request_bytes``) answers ``bad_request`` / ``too_large`` (a ``CommandError`` to
+  the proxies) and nothing moves; an unexpected exception answers ``internal`` (a
+  ``DeviceError``) and is logged.
 - ``state`` (publication): the device's state, when it changed and at least once a second,
   checked at ``state_rate`` Hz. Congestion control DROP: a late state is worthless, the next
   one replaces it (commands and their replies are the reliable path).
@@ -30,7 +33,7 @@ import anyio
 import anyio.abc
 
 from device_drivers import protocol as p
-from device_drivers._errors import CommandError
+from device_drivers._errors import CommandError, DeviceError
 from device_drivers._interfaces import (
     Appliance,
     Arm,
@@ -41,7 +44,8 @@ from device_drivers._interfaces import (
     ObjectSensor,
     ProgressCallback,
 )
-from meshlink import Answer, IncomingQuery, Mesh
+from meshlink import Mesh
+from meshlink.rpc import DEFAULT_MAX_REQUEST_BYTES, RequestHandler, encode
 
 __all__ = ["device_kind", "serve_devices"]
 
@@ -70,39 +74,54 @@ async def serve_devices(
     devices: Mapping[DeviceKey, Device],
     *,
     state_rate: float = 25.0,
+    max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
     task_status: anyio.abc.TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Serve ``devices`` (keyed (owner, device)) until cancelled; reports started once every
-    queryable is known to the router."""
-    served = [_Served(mesh, key, device) for key, device in devices.items()]
+    queryable is known to the router. A longer command request than ``max_request_bytes``
+    answers ``too_large``."""
+    served = [_Served(mesh, key, device, max_request_bytes) for key, device in devices.items()]
     async with anyio.create_task_group() as tg:
         for device in served:
-            await tg.start(partial(mesh.serve, device.cmd_key, device.handle))
+            handler = device.rpc.serve_on(device.cmd_key)
+            await tg.start(partial(mesh.serve, device.cmd_key, handler))
         tg.start_soon(_publish_states, mesh, [d for d in served if d.kind != "sensor"], state_rate)
         task_status.started()
 
 
 class _Served:
-    """One device as served: its kind (resolved once: a runtime Protocol check is slow)
-    and its keys, built once."""
+    """One device as served: its kind (resolved once: a runtime Protocol check is slow), its
+    keys, built once, and its ``cmd`` queryable (:attr:`rpc`)."""
 
-    def __init__(self, mesh: Mesh, key: DeviceKey, device: Device) -> None:
+    def __init__(
+        self,
+        mesh: Mesh,
+        key: DeviceKey,
+        device: Device,
+        max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
+    ) -> None:
         self.mesh, self.key, self.device = mesh, key, device
         self.kind = device_kind(device)
         self.cmd_key = mesh.keys.device_cmd(*key)
         self.state_key = mesh.keys.device_state(*key)
         self.progress_prefix = self.state_key.removesuffix("state") + "progress/"
+        self.rpc: RequestHandler[p.Request, p.Reply] = RequestHandler(
+            p.Request,
+            self.dispatch,
+            errors=self._to_reply,
+            max_request_bytes=max_request_bytes,
+            error_type=p.ErrorReply,
+            name=self.cmd_key,
+        )
 
-    async def handle(self, query: IncomingQuery) -> list[Answer]:
-        try:
-            request = p.decode_request(query.payload or b"")
-            reply = await self.dispatch(request)
-        except Exception as exc:
-            if not isinstance(exc, CommandError):
-                _log.info("%s/%s: %s", *self.key, exc)
-            error = p.encode(p.error_reply(exc))
-            return [Answer(self.cmd_key, error, ok=False, encoding=_ENCODING)]
-        return [Answer(self.cmd_key, p.encode(reply), encoding=_ENCODING)]
+    def _to_reply(self, exc: Exception) -> p.ErrorReply | None:
+        """A device-layer error as its reply (logged unless the command was refused); ``None``
+        for any other exception, which the handler answers ``internal`` and logs."""
+        if not isinstance(exc, DeviceError):
+            return None
+        if not isinstance(exc, CommandError):
+            _log.info("%s/%s: %s", *self.key, exc)
+        return p.error_reply(exc)
 
     async def dispatch(self, request: p.Request) -> p.Reply:
         cmd, device = request.command, self.device
@@ -228,7 +247,7 @@ class _Progress:
         now = time.monotonic()
         if fraction >= 1.0 or now - self._last >= 0.05:
             self._last = now
-            self._publisher.put(p.encode(p.Progress(fraction)), encoding=_ENCODING)
+            self._publisher.put(encode(p.Progress(fraction)), encoding=_ENCODING)
 
     def close(self) -> None:
         self._publisher.undeclare()
@@ -241,7 +260,7 @@ async def _publish_states(mesh: Mesh, devices: list[_Served], rate: float) -> No
         while True:
             now = time.monotonic()
             for device, publisher in zip(devices, publishers, strict=True):
-                payload = p.encode(await device.state())
+                payload = encode(await device.state())
                 previous = last.get(device.key)
                 if previous is None or previous[0] != payload or now - previous[1] >= 1.0:
                     publisher.put(payload, encoding=_ENCODING)

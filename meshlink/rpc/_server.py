@@ -6,7 +6,7 @@ raises an ``Exception`` and never answers plain text.
 from __future__ import annotations
 
 import logging
-from collections.abc import Awaitable, Callable, Mapping, Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from typing import Any, Generic, TypeVar
 
 from .._messages import Answer, IncomingQuery
@@ -69,8 +69,6 @@ class RequestHandler(Generic[Req, Rep]):
         empty: the request an empty payload stands for (e.g. ``ListSkills()``); ``None``: an
             empty payload is malformed like any other.
         error_type: the ErrorReply class to build standard errors with (a service subclass).
-        standard_codes: renames of the standard codes for a service whose clients know them
-            under older names (e.g. ``{"bad_request": "protocol_error"}``); prefer none.
         name: what the log calls this queryable.
 
     Malformed bytes of any kind (see :meth:`~meshlink.rpc.Decoder.decode`) answer
@@ -86,7 +84,6 @@ class RequestHandler(Generic[Req, Rep]):
         max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
         empty: Req | None = None,
         error_type: type[ErrorReply] = ErrorReply,
-        standard_codes: Mapping[str, str] | None = None,
         name: str = "rpc",
     ) -> None:
         self.decoder: Decoder[Req] = Decoder(
@@ -96,7 +93,6 @@ class RequestHandler(Generic[Req, Rep]):
         self.errors = errors
         self.empty = empty
         self.error_type = error_type
-        self.standard_codes = dict(standard_codes or {})
         self.name = name
 
     async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
@@ -133,7 +129,7 @@ class RequestHandler(Generic[Req, Rep]):
             return self._error(INTERNAL, f"{type(exc).__name__}: {exc}")
 
     def _error(self, code: str, message: str) -> ErrorReply:
-        return self.error_type(code=self.standard_codes.get(code, code), message=message)
+        return self.error_type(code=code, message=message)
 
     def serve_on(self, key: str, *, encoding: str = MSGPACK) -> Handler:
         """A :meth:`Mesh.serve <meshlink.Mesh.serve>` handler answering on ``key`` (an error

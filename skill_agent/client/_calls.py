@@ -32,11 +32,19 @@ from types import TracebackType
 from typing import Self, TypeVar
 
 import anyio
-import msgspec
 from anyio.streams.memory import MemoryObjectReceiveStream, MemoryObjectSendStream
 
-from meshlink import Liveness, Mesh, MeshlinkError, NoReplyError, RemoteError, Sample, Subscription
-from skill_agent._errors import AgentTransportError, RemoteSkillError, SkillError, error_for_code
+from meshlink import (
+    Liveness,
+    Mesh,
+    MeshlinkError,
+    NoReplyError,
+    RemoteError,
+    Sample,
+    Subscription,
+)
+from meshlink.rpc import WireError
+from skill_agent._errors import AgentTransportError, SkillError, error_for_reply
 from skill_agent.protocol._codec import decode_event, decode_reply, encode
 from skill_agent.protocol._runs import (
     AgentReply,
@@ -75,20 +83,11 @@ __all__ = [
 _log = logging.getLogger(__name__)
 R = TypeVar("R")
 EventCallback = Callable[[RunEvent], object]
-_error_decoder = msgspec.msgpack.Decoder(ErrorReply)
 
 
 def new_run_id() -> str:
     """A fresh run id (a valid key segment)."""
     return uuid.uuid4().hex
-
-
-def _remote_error(payload: bytes) -> SkillError:
-    try:
-        error = _error_decoder.decode(payload)
-    except msgspec.MsgspecError:
-        return RemoteSkillError("remote_error", payload.decode("utf-8", errors="replace"))
-    return error_for_code(error.code, error.message, error.param_states)
 
 
 class RunFeed:
@@ -139,7 +138,7 @@ class RunFeed:
                 continue
             try:
                 event = decode_event(sample.payload)
-            except msgspec.MsgspecError as e:
+            except WireError as e:
                 _log.warning("undecodable progress event on %s: %s", sample.key, e)
                 continue
             inbox.send_nowait(event)
@@ -205,7 +204,7 @@ class AgentClient:
         try:
             data = await self.mesh.request(key, encode(request), timeout=timeout)
         except RemoteError as e:
-            raise _remote_error(e.payload) from None
+            raise error_for_reply(e.payload) from None
         except NoReplyError:
             raise AgentTransportError(
                 f"agent {self.agent!r} did not answer on {key} within {timeout:g} s: is it "
@@ -216,10 +215,10 @@ class AgentClient:
             raise AgentTransportError(f"agent {self.agent!r}: {e}") from e
         try:
             reply = decode_reply(data)
-        except msgspec.MsgspecError as e:
+        except WireError as e:
             raise AgentTransportError(f"undecodable reply from agent {self.agent!r}: {e}") from e
         if isinstance(reply, ErrorReply):
-            raise error_for_code(reply.code, reply.message, reply.param_states)
+            raise error_for_reply(reply)
         return reply
 
     async def _expect(
@@ -478,7 +477,7 @@ async def find_skills(mesh: Mesh, *, timeout: float = 2.0) -> dict[str, SkillsRe
             continue
         try:
             decoded = decode_reply(reply.payload)
-        except msgspec.MsgspecError:
+        except WireError:
             _log.warning("undecodable skills reply from %s", reply.key)
             continue
         if isinstance(decoded, SkillsReply):

@@ -25,9 +25,9 @@ from contextlib import asynccontextmanager
 from typing import Self
 
 import anyio
-import msgspec
 
 from meshlink import Mesh, Sample, Subscription
+from meshlink.rpc import WireError
 from skill_agent.protocol._codec import decode_log_entry
 from skill_agent.protocol._log import LogEntry
 
@@ -66,7 +66,7 @@ class EventFeed:
             return None
         try:
             return decode_log_entry(sample.payload)
-        except msgspec.MsgspecError as e:
+        except WireError as e:
             self.skipped += 1
             _log.warning(
                 "skipped an undecodable event-log entry on %s (%d bytes): %s",

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from typing import Literal, TypeAlias
 
+import msgspec
 from msgspec import Struct
 
+import meshlink.rpc
 from skill_agent.protocol._skills import SCHEMA_VERSION, ParamState, SkillDescription
 from wm_store.protocol import Value
 
@@ -85,7 +87,7 @@ class RunInfo(Struct, frozen=True, kw_only=True):
     resources: list[str] = []
     started_at: float = 0.0
     result: RunResult | None = None
-    param_states: dict[str, ParamState] = {}
+    param_states: dict[str, ParamState] = msgspec.field(default_factory=dict)
     """Every parameter's state in the run: ``specified``, or ``initialized`` for an optional
     one left without a value."""
 
@@ -180,15 +182,14 @@ class OkReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
-class ErrorReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
-    """Refused; ``code`` is the error class's code (see ``skill_agent``)."""
+class ErrorReply(meshlink.rpc.ErrorReply, tag="ErrorReply", frozen=True, kw_only=True):
+    """Refused; ``code`` is the error class's code (see ``skill_agent``) or a standard code of
+    :mod:`meshlink.rpc` (``bad_request``, ``too_large``, ``internal``). The layer's
+    ``ErrorReply`` with the same tag, plus the parameters' states."""
 
-    code: str
-    message: str
-    param_states: dict[str, ParamState] = {}
+    param_states: dict[str, ParamState] = msgspec.field(default_factory=dict)
     """A start refused because parameters could not all be specified (codes
     ``unspecified_parameter``, ``inference``): every parameter's state at the refusal."""
-    schema_version: int = SCHEMA_VERSION
 
 
 AgentReply: TypeAlias = SkillsReply | RunStarted | RunFinished | RunsReply | OkReply | ErrorReply

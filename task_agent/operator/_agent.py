@@ -14,7 +14,8 @@ import anyio
 import msgspec
 from anyio.abc import TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh
+from meshlink import Mesh
+from meshlink.rpc import DEFAULT_MAX_REQUEST_BYTES, RequestHandler, coded_errors
 from skill_agent import Skill, SkillContext, SkillFailure
 from skill_agent.protocol import ParamSpec, SkillDescription
 from skill_agent.runtime import AgentCore, SkillEntry
@@ -23,19 +24,18 @@ from wm_store import WmClient, WmError
 from wm_store.protocol import AddElement, Op, UpdateElement, Value
 
 from .._client import operator_rpc_key
+from .._errors import RequestError, TaskError
 from ..discovery import OPERATOR_CLASS, Discovery
 from ..execution import OPERATOR_NOTE
 from ..protocol import (
     AnswerPending,
-    ErrorReply,
     ListPending,
     OkReply,
     OperatorReply,
+    OperatorRequest,
     PendingReply,
     PendingStep,
     SeenAt,
-    decode_operator_request,
-    encode,
 )
 from ._sightings import seen_text, sighting_ops
 
@@ -199,34 +199,43 @@ class SkillMirror:
 
 
 class OperatorService:
-    """``operator/rpc`` requests -> replies (transport-free)."""
+    """``operator/rpc`` requests -> replies (transport-free). Errors: an id that is not pending
+    answers ``unknown_request``; malformed bytes ``bad_request``, a request over
+    ``max_request_bytes`` ``too_large`` (:mod:`meshlink.rpc`)."""
 
-    def __init__(self, name: str, desk: OperatorDesk) -> None:
+    def __init__(
+        self, name: str, desk: OperatorDesk, *, max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES
+    ) -> None:
         self.name = name
         self.desk = desk
+        self.rpc: RequestHandler[OperatorRequest, OperatorReply] = RequestHandler(
+            OperatorRequest,
+            self.handle,
+            errors=coded_errors(TaskError),
+            max_request_bytes=max_request_bytes,
+            name="operator/rpc",
+        )
 
-    def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
-        """Decode, answer, encode; never raises. Returns ``(payload, ok)``."""
-        try:
-            request = decode_operator_request(data)
-        except msgspec.MsgspecError as e:
-            return encode(ErrorReply(code="bad_request", message=f"undecodable: {e}")), False
-        reply: OperatorReply
+    async def handle_bytes(self, data: bytes) -> tuple[bytes, bool]:
+        """Decode, answer, encode (:attr:`rpc`); never raises. Returns ``(payload, ok)``."""
+        return await self.rpc.handle_bytes(data)
+
+    async def handle(self, request: OperatorRequest) -> OperatorReply:
+        """Answer one request; refusals raise :class:`~task_agent.RequestError`."""
         match request:
             case ListPending():
-                reply = PendingReply(agent=self.name, pending=self.desk.pending())
+                return PendingReply(agent=self.name, pending=self.desk.pending())
             case AnswerPending(id=request_id, success=success, message=message, seen=seen):
                 try:
                     step = self.desk.answer(request_id, success, message, seen)
                 except KeyError as e:
-                    return encode(ErrorReply(code=UNKNOWN_REQUEST, message=e.args[0])), False
+                    raise RequestError(UNKNOWN_REQUEST, e.args[0]) from None
                 verdict = "done" if success else "failed"
                 who = f" by {request.author}" if request.author else ""
                 _log.warning(
                     "operator request %s (%s) answered %s%s", step.id, step.skill, verdict, who
                 )
-                reply = OkReply(message=f"request {step.id} ({step.skill}) answered: {verdict}")
-        return encode(reply), True
+                return OkReply(message=f"request {step.id} ({step.skill}) answered: {verdict}")
 
 
 async def _register(wm: WmClient, name: str, address: str) -> None:
@@ -257,18 +266,6 @@ async def serve_operator(
     core = AgentCore(name=name, wm=wm, skills=mirror.entries())
     agent_service, operator = AgentService(core), OperatorService(name, desk)
 
-    async def rpc(query: IncomingQuery) -> list[Answer]:
-        data, ok = await agent_service.handle_bytes(query.payload or b"")
-        return [Answer(key=keys.agent_rpc(name), payload=data, ok=ok)]
-
-    async def skills(query: IncomingQuery) -> list[Answer]:
-        data, ok = agent_service.skills_bytes(query.payload or b"")  # as a robot agent's
-        return [Answer(key=keys.agent_skills(name), payload=data, ok=ok)]
-
-    async def answer(query: IncomingQuery) -> list[Answer]:
-        data, ok = operator.handle_bytes(query.payload or b"")
-        return [Answer(key=operator_rpc_key(keys), payload=data, ok=ok)]
-
     publisher = RunEventPublisher(mesh, name)
     unsubscribe = publisher.attach(core)  # run progress and the event log
     token = None
@@ -276,9 +273,11 @@ async def serve_operator(
         async with anyio.create_task_group() as tg:
             tg.start_soon(publisher.run)
             await tg.start(core.run)
-            await tg.start(mesh.serve, keys.agent_skills(name), skills)
-            await tg.start(mesh.serve, keys.agent_rpc(name), rpc)
-            await tg.start(mesh.serve, operator_rpc_key(keys), answer)
+            skills_key, rpc_key = keys.agent_skills(name), keys.agent_rpc(name)
+            await tg.start(mesh.serve, skills_key, agent_service.skills.serve_on(skills_key))
+            await tg.start(mesh.serve, rpc_key, agent_service.rpc.serve_on(rpc_key))
+            answers = operator_rpc_key(keys)
+            await tg.start(mesh.serve, answers, operator.rpc.serve_on(answers))
             token = mesh.declare_token(keys.agent(name))
             await _register(wm, name, keys.agent(name))
             tg.start_soon(mirror.follow, wm, core)

@@ -56,8 +56,11 @@ the predicted steps and final world model. A task with no problems does not fail
 reasons at run time as long as the world model evolves as predicted.
 
 The code: ``_verify`` (:func:`check`, :func:`verify`: the walk over the blocks and the
-symbolic simulation), ``_call`` (one call when its step starts) and ``_scene`` (the private
-world model copy, :class:`SceneView`, and what parallel branches change in it).
+symbolic simulation), ``_call`` (one call when its step starts: its agents, parameters and
+conditions), ``_values`` (a given value: kind, element, device), ``_dataflow`` (a value passed
+by ``@step.param``), ``_resources`` (the devices calls lock), ``_attempt`` (what one attempt
+found, what earlier steps left) and ``_scene`` (the private world model copy,
+:class:`SceneView`, and what parallel branches change in it).
 """
 
 from ._scene import SceneView as SceneView

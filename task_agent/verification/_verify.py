@@ -21,14 +21,15 @@ from wm_store.scene import SceneState, apply_transaction, id_sort_key
 from ..discovery import AgentInfo
 from ..protocol import Call, Parallel, TaskFile, VerifyProblem
 from ..taskfile import ROOT_PATH, BlockSite, CallSite, assign_ids, blocks, walk, where
-from ._call import Attempt, CallChecker, Earlier, Kind, broken
+from ._attempt import Attempt, Earlier, Kind
+from ._call import CallChecker, broken
+from ._resources import call_locks, resource_problems
 from ._scene import SceneView, changes, clashes, scene_copy
 
 __all__ = ["Report", "StepPrediction", "check", "verify"]
 
 Level = Literal["error", "warning", "note"]
 _RANK = {k: i for i, k in enumerate(("structure", "unknown", "dataflow", "type", "resource"))}
-_AGENT = "agent:"
 
 
 class StepPrediction(msgspec.Struct, frozen=True, kw_only=True):
@@ -256,7 +257,7 @@ class _Verifier:
             self.report(site.path, kind, head + message)
         for kind, message in att.warnings:
             self.report(site.path, kind, head + message, "warning")
-        self.locks[site.path] = _locks(att, view, fixed=len(found) == 1)
+        self.locks[site.path] = call_locks(att, view, fixed=len(found) == 1)
         if att.values is None:
             return
         hardware = {p.name for p in att.desc.parameters if p.kind == "hardware"}
@@ -288,54 +289,9 @@ class _Verifier:
             locks=sorted(self.locks[site.path], key=id_sort_key),
         )
 
-    # ------------------------------------------------------------------ resources
-
     def resources(self) -> None:
-        for site in self.calls.values():
-            mine, found = self.locks.get(site.path, set()), []
-            for other in site.parallel:
-                common = mine & self.locks.get(other, set())
-                if common and self.calls[other].order < site.order:
-                    what = ", ".join(self.device(d) for d in sorted(common, key=id_sort_key))
-                    found.append(f"{where(other, self.calls[other].call)} (both lock {what})")
-            if found:
-                message = (
-                    f"may run at the same time as {'; '.join(found)}: an agent runs one skill "
-                    "per device at a time and refuses the second start; order them in a "
-                    "sequence or use other devices"
-                )
-                self.report(site.path, "resource", message)
-
-    def device(self, lock: str) -> str:
-        if lock.startswith(_AGENT):
-            return f"agent {lock[len(_AGENT) :]} (its devices for these calls are not known)"
-        element = self.state.get(lock)
-        label = element.label if element is not None else ""
-        return f"{lock} ({label})" if label and label != lock else lock
-
-
-def _locks(att: Attempt, view: WorldView, *, fixed: bool) -> set[str]:
-    """The devices the call locks (see the module doc): bound at run time as
-    :func:`~skill_agent.parameters.specify` binds them (the agent's first device of the class)."""
-    locks: set[str] = set()
-    known = att.values if fixed and att.values is not None else att.given
-    for spec in att.desc.parameters:
-        value = known.get(spec.name)
-        if spec.kind != "hardware" or (value is None and (spec.optional or not fixed)):
-            continue
-        if value is None:
-            devices = sorted(att.agent.hardware, key=id_sort_key)
-            value = next(
-                (d for d in devices if _is(view, d, spec.type)), f"{_AGENT}{att.agent.name}"
-            )
-        if isinstance(value, str):
-            locks.add(value)
-    return locks
-
-
-def _is(view: WorldView, element_id: str, cls: str) -> bool:
-    element = view.find_element(element_id)
-    return element is not None and view.ontology.is_a(element.type, cls)
+        for path, message in resource_problems(self.calls, self.locks, self.state):
+            self.report(path, "resource", message)
 
 
 def check(task: TaskFile, view: WorldView, agents: Sequence[AgentInfo]) -> Report:

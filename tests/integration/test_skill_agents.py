@@ -31,6 +31,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from meshlink import Mesh, MeshConfig, open_mesh
+from meshlink.rpc import WireError
 from skill_agent import AgentTransportError, ResourceBusyError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import (
@@ -486,7 +487,7 @@ def lists_skills(payload: bytes) -> bool:
         return True
     try:
         return isinstance(decode_request(payload), ListSkills)
-    except msgspec.MsgspecError:
+    except WireError:
         return False
 
 

@@ -27,14 +27,20 @@ from collections.abc import AsyncIterator, Iterator
 from contextlib import asynccontextmanager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import anyio
 import pytest
 
 from meshlink import Mesh, MeshConfig, open_mesh
+from meshlink.rpc import Decoder, encode
+from meshlink.testing import fuzz_queryable, hostile_payloads
 from skill_agent.client import AgentClient
 from task_agent import TaskClient, new_task_id
 from task_agent.protocol import (
+    ListPending,
+    ListTasks,
+    OperatorReply,
     Planned,
     Replanning,
     StepFinished,
@@ -42,6 +48,8 @@ from task_agent.protocol import (
     TaskEvent,
     TaskFinished,
     TaskOptions,
+    TaskReply,
+    TaskStatus,
 )
 from wm_store import WmClient, ZenohTransport
 from wm_store.protocol import (
@@ -59,7 +67,7 @@ from .procs import ROOT, Child, start_store
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.anyio]
 
-SKILLS = ["navigate:Navigate", "pick:Pick", "place:Place", "serve:Serve"]
+SKILLS = ["Navigate", "Pick", "Place", "Serve"]
 DEVICES = (("Arm", "arm"), ("Gripper", "gripper"), ("MobileBase", "base"), ("Camera", "camera"))
 TIME_SCALE = 0.05
 """A simulated run lasts ``duration * TIME_SCALE``: navigate 0.25 s, pick / place 0.2 s."""
@@ -69,7 +77,7 @@ def agent_config(name: str, pick: float, time_scale: float = TIME_SCALE) -> str:
     devices = "".join(
         f'\n[[devices]]\ntype = "{t}"\nlabel = "{name}-{label}"\n' for t, label in DEVICES
     )
-    paths = ", ".join(f'"skill_agent.skills.{s}"' for s in SKILLS)
+    paths = ", ".join(f'"skill_agent.skills:{s}"' for s in SKILLS)
     return textwrap.dedent(
         f"""
         name = "{name}"
@@ -377,6 +385,25 @@ def test_cli_plan_dry_run_and_emit_pddl(site: Site) -> None:
     no = site.skimesh("task", "plan", "--goal", "not contain(station-1, box-1)")
     assert no.returncode == 2, no.stdout + no.stderr
     assert "unsolvable" in no.stderr
+
+
+async def test_hostile_payloads_get_typed_replies_over_zenoh(site: Site) -> None:
+    """Every reply of tasks/rpc and operator/rpc to malformed, hostile or oversized requests
+    is an ErrorReply (or a valid reply), and no task appears."""
+    async with site.connected() as (mesh, _, client):
+        queryables: list[tuple[str, Decoder[Any], list[bytes]]] = [
+            (
+                mesh.keys.tasks_rpc(),
+                Decoder(TaskReply),
+                [encode(ListTasks()), encode(TaskStatus(task_id="abcd"))],
+            ),
+            (mesh.keys.operator_rpc(), Decoder(OperatorReply), [encode(ListPending())]),
+        ]
+        before = await client.list()
+        for key, replies, samples in queryables:
+            count = await fuzz_queryable(mesh, key, replies, hostile_payloads(samples))
+            assert count >= len(hostile_payloads(samples, huge=0))
+        assert await client.list() == before
 
 
 async def test_killing_an_agent_mid_task_lets_the_other_robot_finish(site: Site) -> None:

@@ -12,10 +12,20 @@ Key space (prefix ``skimesh/<mesh>``):
 - ``wm/changes``        publication, one :class:`Change` per committed transaction
 - ``wm/elements/<id>``  storage-style get: each element as JSON, for any Zenoh tool
 
+A refused request answers :class:`meshlink.rpc.ErrorReply` (in :data:`Reply`), the error every
+skimesh service speaks: ``code`` is a :class:`~wm_store.WmError` code or one of meshlink's
+standard codes (``bad_request``, ``too_large``, ``internal``). Messages are encoded with
+:func:`meshlink.rpc.encode`.
+
 The schema is split by what a message is: ``_values`` (typed values, elements, relations,
 class and template definitions), ``_ops`` (transaction ops), ``_changes`` (the change stream),
-``_requests``, ``_replies`` and ``_codec`` (the MessagePack encoder and decoders).
+``_requests``, ``_replies`` and ``_codec`` (the decoders).
 """
+
+# meshlink.rpc's ErrorReply and encode stay importable from here for the store's importers;
+# their one public path (``__all__``) is meshlink.rpc.
+from meshlink.rpc import ErrorReply as ErrorReply
+from meshlink.rpc import encode as encode
 
 from ._changes import Change as Change
 from ._changes import ClassDefined as ClassDefined
@@ -28,7 +38,6 @@ from ._changes import TemplateDefined as TemplateDefined
 from ._codec import decode_change as decode_change
 from ._codec import decode_reply as decode_reply
 from ._codec import decode_request as decode_request
-from ._codec import encode as encode
 from ._ops import AddElement as AddElement
 from ._ops import DefineClass as DefineClass
 from ._ops import DefineTemplate as DefineTemplate
@@ -42,7 +51,6 @@ from ._replies import CardinalityReply as CardinalityReply
 from ._replies import CardinalityViolation as CardinalityViolation
 from ._replies import ChangesReply as ChangesReply
 from ._replies import ElementsReply as ElementsReply
-from ._replies import ErrorReply as ErrorReply
 from ._replies import InfoReply as InfoReply
 from ._replies import RelationsReply as RelationsReply
 from ._replies import Reply as Reply
@@ -101,7 +109,6 @@ __all__ = [
     "ElementPut",
     "ElementRemoved",
     "ElementsReply",
-    "ErrorReply",
     "Frame",
     "GetElements",
     "Info",
@@ -144,5 +151,4 @@ __all__ = [
     "decode_change",
     "decode_reply",
     "decode_request",
-    "encode",
 ]

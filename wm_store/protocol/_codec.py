@@ -1,38 +1,29 @@
-"""MessagePack encoding of every protocol Struct and the decoders of requests, replies and
-changes."""
+"""Decoders of the store's requests, replies and changes (:class:`meshlink.rpc.Decoder`, built
+once): every way bytes can fail to decode raises one :class:`meshlink.rpc.WireError`. Encoding
+is :func:`meshlink.rpc.encode`."""
 
 from __future__ import annotations
 
-from typing import Any
-
-import msgspec
-
+from meshlink.rpc import Decoder
 from wm_store.protocol._changes import Change
 from wm_store.protocol._replies import Reply
 from wm_store.protocol._requests import Request
 
-# --------------------------------------------------------------------------- codecs
-# Built once (msgspec perf tip); decoders are thread-safe.
-
-_encoder = msgspec.msgpack.Encoder()
-_request_decoder = msgspec.msgpack.Decoder(Request)
-_reply_decoder = msgspec.msgpack.Decoder(Reply)
-_change_decoder = msgspec.msgpack.Decoder(Change)
-
-
-def encode(message: Any) -> bytes:
-    """Encode any protocol Struct to MessagePack."""
-    return _encoder.encode(message)
+_request: Decoder[Request] = Decoder(Request, what="request")
+_reply: Decoder[Reply] = Decoder(Reply, what="reply")
+_change: Decoder[Change] = Decoder(Change, what="change")
 
 
 def decode_request(data: bytes) -> Request:
-    """Decode a request; raises ``msgspec.DecodeError`` / ``ValidationError`` on bad bytes."""
-    return _request_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+    """The request in ``data``; raises :class:`~meshlink.rpc.WireError` on bad bytes."""
+    return _request.decode(data)
 
 
 def decode_reply(data: bytes) -> Reply:
-    return _reply_decoder.decode(data)  # type: ignore[no-any-return]  # union decoder is untyped
+    """The reply in ``data``; raises :class:`~meshlink.rpc.WireError` on bad bytes."""
+    return _reply.decode(data)
 
 
 def decode_change(data: bytes) -> Change:
-    return _change_decoder.decode(data)
+    """The change in ``data``; raises :class:`~meshlink.rpc.WireError` on bad bytes."""
+    return _change.decode(data)

@@ -1,4 +1,5 @@
-"""Replies of the store, one per request kind, and :class:`ErrorReply` (:data:`Reply`)."""
+"""Replies of the store, one per request kind, and :class:`meshlink.rpc.ErrorReply` (the
+refusal every skimesh service answers with): :data:`Reply`."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from typing import TypeAlias
 
 from msgspec import Struct
 
+from meshlink.rpc import ErrorReply
 from wm_store.protocol._changes import Change
 from wm_store.protocol._values import SCHEMA_VERSION, ClassDef, Element, Relation, TemplateDef
 
@@ -88,14 +90,6 @@ class CardinalityReply(Struct, tag=True, tag_field="reply", kw_only=True):
     revision: int
     checked: int
     violations: list[CardinalityViolation] = []
-    schema_version: int = SCHEMA_VERSION
-
-
-class ErrorReply(Struct, tag=True, tag_field="reply", kw_only=True):
-    """The request was refused; nothing changed. ``code`` is the error class's code."""
-
-    code: str
-    message: str
     schema_version: int = SCHEMA_VERSION
 
 

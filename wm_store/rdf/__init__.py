@@ -27,7 +27,8 @@ individuals of any IRI — into transaction ops (:data:`~wm_store.protocol.Op`);
 Everything but :class:`SparqlEngine` is pure and synchronous; cost is linear in the scene and
 dominated by rdflib (see docs/benchmarks.md, section "World model").
 
-Inside: ``_graph`` (the mapping and the export), ``_turtle_import``, ``_sparql``.
+Inside: ``_graph`` (the mapping and the export), ``_turtle_import``, ``_sparql`` (the engine:
+graph cache and threads) and ``_sparql_eval`` (one query: checks, bindings, rows).
 """
 
 from ._graph import METADATA_PREDICATES as METADATA_PREDICATES

@@ -26,34 +26,37 @@ CONSTRUCT and DESCRIBE give ``subject``, ``predicate``, ``object`` rows, sorted.
 
 from __future__ import annotations
 
-import re
 import weakref
 from collections import OrderedDict
 from collections.abc import Iterable, Mapping
-from typing import Any, Final
+from typing import Final
 
 import anyio
 import msgspec
 from anyio import CapacityLimiter
-from rdflib import BNode, Graph, Literal, Variable
-from rdflib.namespace import OWL, RDF, RDFS, XSD
+from rdflib import Graph
 from rdflib.plugins.sparql import prepareQuery
-from rdflib.plugins.sparql.algebra import traverse
-from rdflib.plugins.sparql.parser import parseUpdate
-from rdflib.plugins.sparql.parserutils import CompValue
 from rdflib.plugins.sparql.sparql import Query
-from rdflib.term import Identifier, Node
+from rdflib.term import Identifier
 
+from meshlink.rpc import encode
 from wm_store._errors import ValidationError
 from wm_store.ontology import Ontology
-from wm_store.protocol import Element, Relation, SparqlReply, encode
-from wm_store.rdf._graph import SCENE, add_scene, new_graph
+from wm_store.protocol import Element, Relation, SparqlReply
+from wm_store.rdf._graph import add_scene, new_graph
+from wm_store.rdf._sparql_eval import (
+    FIXED_PREFIXES,
+    VARNAME,
+    check_safe,
+    evaluate,
+    prefixes_for,
+    prepare_error,
+    query_variables,
+    term_for,
+)
 from wm_store.scene import SceneState
 
 __all__ = ["SparqlEngine", "build_graph"]
-
-_VARNAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-_FIXED_PREFIXES = {"skms": SCENE, "rdf": RDF, "rdfs": RDFS, "owl": OWL, "xsd": XSD}
 
 
 _Key = tuple[int, int, int]
@@ -158,12 +161,12 @@ class SparqlEngine:
         if prepared is not None:
             self._prepared.move_to_end(key)
             return prepared
-        namespaces = {"skm": ontology.namespace, **_FIXED_PREFIXES}
+        namespaces = {"skm": ontology.namespace, **FIXED_PREFIXES}
         try:
             prepared = prepareQuery(text, initNs=namespaces)
         except Exception as exc:
-            raise _prepare_error(text, exc) from None
-        _check_safe(prepared)
+            raise prepare_error(text, exc) from None
+        check_safe(prepared)
         self._prepared[key] = prepared
         if len(self._prepared) > self._prepared_cache:
             self._prepared.popitem(last=False)
@@ -172,18 +175,18 @@ class SparqlEngine:
     def _bindings(
         self, state: SceneState, ontology: Ontology, prepared: Query, bindings: Mapping[str, str]
     ) -> dict[str, Identifier]:
-        names = _variables(prepared)
+        names = query_variables(prepared)
         out: dict[str, Identifier] = {}
         for raw, value in bindings.items():
             name = raw[1:] if raw[:1] in ("?", "$") else raw
-            if not _VARNAME.fullmatch(name):
+            if not VARNAME.fullmatch(name):
                 raise ValidationError(f"binding name {raw!r} is not a SPARQL variable name")
             if name not in names:
                 raise ValidationError(
                     f"binding ?{name} does not occur in the query; its variables are "
                     f"{', '.join('?' + v for v in sorted(names)) or 'none'}"
                 )
-            out[name] = _term(state, ontology, value)
+            out[name] = term_for(state, ontology, value)
         return out
 
     # ------------------------------------------------------------------ running
@@ -201,8 +204,8 @@ class SparqlEngine:
         prepared = self.prepare(text, ontology)
         init = self._bindings(state, ontology, prepared, bindings or {})
         graph = self.graph(state, ontology)
-        prefixes = _prefixes(ontology)
-        return _evaluate(graph, prepared, init, prefixes, state.revision, self.max_rows)
+        prefixes = prefixes_for(ontology)
+        return evaluate(graph, prepared, init, prefixes, state.revision, self.max_rows)
 
     async def query_async(
         self,
@@ -219,10 +222,10 @@ class SparqlEngine:
         The reply is for the revision the state had when the call started."""
         prepared = self.prepare(text, ontology)
         init = self._bindings(state, ontology, prepared, bindings or {})
-        prefixes, revision, max_rows = _prefixes(ontology), state.revision, self.max_rows
+        prefixes, revision, max_rows = prefixes_for(ontology), state.revision, self.max_rows
         graph = await self.graph_async(state, ontology, limiter=limiter)
         return await anyio.to_thread.run_sync(
-            _evaluate, graph, prepared, init, prefixes, revision, max_rows, limiter=limiter
+            evaluate, graph, prepared, init, prefixes, revision, max_rows, limiter=limiter
         )
 
 
@@ -232,138 +235,3 @@ class SparqlEngine:
 def _build_from(ontology: Ontology, data: bytes) -> Graph:
     elements, relations = _scene_decoder.decode(data)
     return build_graph(ontology, elements, relations)
-
-
-def _prepare_error(text: str, exc: Exception) -> ValidationError:
-    try:
-        parseUpdate(text)
-    except Exception:
-        pass
-    else:
-        return ValidationError(
-            "SPARQL updates are not allowed: the world model is read-only through SPARQL; "
-            "change it with a transaction (Transact: AddElement, UpdateElement, SetRelation...)"
-        )
-    line, col = getattr(exc, "lineno", None), getattr(exc, "col", None)
-    if isinstance(line, int) and isinstance(col, int):
-        source = getattr(exc, "line", "")
-        caret = " " * (col - 1) + "^"
-        return ValidationError(
-            f"SPARQL syntax error at line {line}, column {col}: {getattr(exc, 'msg', exc)}\n"
-            f"  {source}\n  {caret}\n"
-            "(only SELECT, ASK, CONSTRUCT and DESCRIBE are accepted)"
-        )
-    message = str(exc)
-    if "Unknown namespace prefix" in message:
-        message += "; predeclared prefixes: skm, skms, rdf, rdfs, owl, xsd (or add PREFIX)"
-    return ValidationError(f"SPARQL query not understood: {message}")
-
-
-def _check_safe(prepared: Query) -> None:
-    if prepared.algebra.get("datasetClause"):
-        raise ValidationError(
-            "FROM / FROM NAMED are not allowed: queries run over the world model's "
-            "ontology + scene graph only"
-        )
-    found: list[str] = []
-
-    def visit(node: Any) -> None:
-        if isinstance(node, CompValue) and node.name == "ServiceGraphPattern":
-            found.append(node.name)
-
-    traverse(prepared.algebra, visitPre=visit)
-    if found:
-        raise ValidationError("SERVICE is not allowed: the world model answers from its own graph")
-
-
-def _variables(prepared: Query) -> set[str]:
-    names: set[str] = set()
-
-    def visit(node: Any) -> None:
-        if isinstance(node, Variable):
-            names.add(str(node))
-
-    traverse(prepared.algebra, visitPre=visit)
-    return names
-
-
-def _prefixes(ontology: Ontology) -> dict[str, str]:
-    return {"skm": str(ontology.namespace), **{p: str(ns) for p, ns in _FIXED_PREFIXES.items()}}
-
-
-def _term(state: SceneState, ontology: Ontology, value: str) -> Identifier:
-    if value in state:
-        return SCENE[value]
-    prefix, sep, name = value.partition(":")
-    if sep and prefix == "skm" and _is_term(ontology, name):
-        return ontology.namespace[name]
-    return Literal(value)
-
-
-def _is_term(ontology: Ontology, name: str) -> bool:
-    return (
-        name in ontology.classes or name in ontology.relations or name in ontology.data_properties
-    )
-
-
-def _render(node: Node | None, prefixes: Mapping[str, str]) -> str | None:
-    if node is None:
-        return None
-    if isinstance(node, Literal):
-        return str(node)
-    if isinstance(node, BNode):
-        return f"_:{node}"
-    text = str(node)
-    if text.startswith(_SCENE_STR):
-        return text[len(_SCENE_STR) :]
-    for prefix, base in prefixes.items():
-        if text.startswith(base) and _VARNAME.fullmatch(text[len(base) :]):
-            return f"{prefix}:{text[len(base) :]}"
-    return text
-
-
-_SCENE_STR = str(SCENE)
-
-
-def _evaluate(
-    graph: Graph,
-    prepared: Query,
-    init: Mapping[str, Identifier],
-    prefixes: Mapping[str, str],
-    revision: int,
-    max_rows: int,
-) -> SparqlReply:
-    """Run ``prepared`` on ``graph`` (thread-safe: reads only) and render the reply."""
-    try:
-        result = graph.query(prepared, initBindings=init)
-        if result.type == "ASK":
-            return SparqlReply(
-                revision=revision,
-                variables=["ask"],
-                rows=[["true" if result.askAnswer else "false"]],
-            )
-        if result.type in ("CONSTRUCT", "DESCRIBE"):
-            assert result.graph is not None
-            triples = sorted(result.graph)
-            _check_rows(len(triples), max_rows)
-            rows = [[_render(t, prefixes) for t in triple] for triple in triples]
-            return SparqlReply(
-                revision=revision, variables=["subject", "predicate", "object"], rows=rows
-            )
-        variables = [str(v) for v in result.vars or ()]
-        rows = []
-        for row in result:
-            rows.append([_render(term, prefixes) for term in row])  # type: ignore[union-attr]
-            _check_rows(len(rows), max_rows)
-    except ValidationError:
-        raise
-    except Exception as exc:  # rdflib raises plain exceptions for evaluation errors
-        raise ValidationError(f"SPARQL evaluation failed: {type(exc).__name__}: {exc}") from None
-    return SparqlReply(revision=revision, variables=variables, rows=rows)
-
-
-def _check_rows(count: int, max_rows: int) -> None:
-    if max_rows and count > max_rows:
-        raise ValidationError(
-            f"the query gives more than {max_rows} rows; add LIMIT or narrow the pattern"
-        )

@@ -3,7 +3,7 @@
 - :class:`WmStore` (with :class:`StoreConfig`): the authoritative store: scene state, ontology
   with its run-time extensions, durable log, bounded change history. Transport-free.
 - :class:`WmService`: request -> reply dispatch over a store, independent of the transport;
-  it never raises for bad input (every refusal is an ``ErrorReply``).
+  it never raises for bad input (every refusal is a ``meshlink.rpc.ErrorReply``).
 - :func:`serve_store` and :class:`PresenceMonitor`: the Zenoh adapters, which serve the store
   on the mesh and keep each Agent's ``available`` flag equal to its liveliness token. They
   (``_zenoh``, ``_presence``) are the only modules here that import ``meshlink``.

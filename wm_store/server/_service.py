@@ -1,25 +1,29 @@
 """Request -> reply dispatch of the world-model store, independent of the transport.
 
 :class:`WmService` answers every :data:`~wm_store.protocol.Request` with a
-:data:`~wm_store.protocol.Reply`. It never raises for bad input: malformed bytes, unknown tags,
-wrong field types, unknown names, rule violations and oversized messages all become an
-:class:`~wm_store.protocol.ErrorReply` naming the problem, and the state is unchanged. The
-Zenoh server and the in-memory test transport both sit on top of it.
+:data:`~wm_store.protocol.Reply`. It never raises for bad input: malformed bytes (including
+invalid UTF-8 and nesting too deep), unknown tags, wrong field types, unknown names, rule
+violations and oversized messages all become a :class:`meshlink.rpc.ErrorReply` naming the
+problem, and the state is unchanged. One :class:`meshlink.rpc.RequestHandler` per queryable
+(``wm/rpc`` and the read-only ``wm/query``) decodes, limits the size and encodes; the Zenoh
+server and the in-memory test transport both sit on top of them.
+
+Codes: a :class:`~wm_store.WmError`'s own ``code``; meshlink's standard ``bad_request``
+(malformed request, or a ``ValueError``/``TypeError``/``KeyError`` raised by the request),
+``too_large`` and ``internal`` (any other exception, logged).
 """
 
 from __future__ import annotations
 
 import logging
 
-import msgspec
-
+from meshlink.rpc import BAD_REQUEST, DEFAULT_MAX_REQUEST_BYTES, ErrorReply, RequestHandler
 from wm_store._errors import ElementNotFoundError, ProtocolError, WmError
 from wm_store.protocol import (
     CardinalityReply,
     ChangesSince,
     CheckCardinality,
     ElementsReply,
-    ErrorReply,
     GetElements,
     Info,
     Parent,
@@ -31,8 +35,6 @@ from wm_store.protocol import (
     Snapshot,
     Sparql,
     Transact,
-    decode_request,
-    encode,
 )
 from wm_store.rdf import SparqlEngine
 from wm_store.scene import match_relations, min_cardinality_violations, resolve
@@ -42,51 +44,51 @@ __all__ = ["MAX_REQUEST_BYTES", "WmService"]
 
 _log = logging.getLogger(__name__)
 
-MAX_REQUEST_BYTES = 16 * 1024 * 1024
+MAX_REQUEST_BYTES = DEFAULT_MAX_REQUEST_BYTES
 
 
 class WmService:
-    """Answers world-model requests against one :class:`~wm_store.server.WmStore`."""
+    """Answers world-model requests against one :class:`~wm_store.server.WmStore`.
+
+    ``rpc`` and ``query`` are the request handlers of ``wm/rpc`` and of the read-only
+    ``wm/query`` (:meth:`~meshlink.rpc.RequestHandler.serve_on` serves one on a key); both
+    refuse requests longer than ``max_request_bytes``.
+    """
 
     def __init__(self, store: WmStore, *, max_request_bytes: int = MAX_REQUEST_BYTES) -> None:
         self.store = store
         self.max_request_bytes = max_request_bytes
         self._sparql = SparqlEngine()
+        self.rpc: RequestHandler[Request, Reply] = RequestHandler(
+            Request, self.handle, max_request_bytes=max_request_bytes, name="wm/rpc"
+        )
+        self.query: RequestHandler[Request, Reply] = RequestHandler(
+            Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
+        )
 
     async def handle_bytes(self, data: bytes, *, read_only: bool = False) -> tuple[bytes, bool]:
         """Decode, answer and encode one request. Returns ``(reply bytes, ok)``.
 
         ``read_only`` refuses transactions (the ``wm/query`` endpoint)."""
-        if len(data) > self.max_request_bytes:
-            reply: Reply = ErrorReply(
-                code=ProtocolError.code,
-                message=f"request of {len(data)} bytes exceeds the limit of "
-                f"{self.max_request_bytes}; split the transaction",
-            )
-        else:
-            try:
-                request = decode_request(data)
-            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
-                reply = ErrorReply(code=ProtocolError.code, message=f"malformed request: {exc}")
-            else:
-                if read_only and isinstance(request, Transact):
-                    reply = ErrorReply(
-                        code=ProtocolError.code,
-                        message="this endpoint is read-only: send transactions to wm/rpc",
-                    )
-                else:
-                    reply = await self.handle(request)
-        return encode(reply), not isinstance(reply, ErrorReply)
+        return await (self.query if read_only else self.rpc).handle_bytes(data)
 
     async def handle(self, request: Request) -> Reply:
-        """Answer one decoded request; errors become :class:`ErrorReply`."""
+        """Answer one decoded request; the store's errors become :class:`ErrorReply`."""
         try:
             return await self._dispatch(request)
         except WmError as exc:
             return ErrorReply(code=exc.code, message=str(exc))
         except (ValueError, TypeError, KeyError) as exc:
             _log.warning("request %s refused: %s", type(request).__name__, exc)
-            return ErrorReply(code="bad_request", message=f"{type(exc).__name__}: {exc}")
+            return ErrorReply(code=BAD_REQUEST, message=f"{type(exc).__name__}: {exc}")
+
+    async def _handle_read(self, request: Request) -> Reply:
+        if isinstance(request, Transact):
+            return ErrorReply(
+                code=ProtocolError.code,
+                message="this endpoint is read-only: send transactions to wm/rpc",
+            )
+        return await self.handle(request)
 
     async def _dispatch(self, request: Request) -> Reply:
         store = self.store

@@ -4,7 +4,7 @@ This module, :mod:`~wm_store.server._presence` and :mod:`~wm_store._zenoh_transp
 only parts of ``wm_store`` that talk to the network. It serves:
 
 - ``wm/rpc``: typed requests (:mod:`wm_store.protocol`), answered by :class:`WmService`; an error
-  is sent as a Zenoh error reply carrying an :class:`~wm_store.protocol.ErrorReply`;
+  is sent as a Zenoh error reply carrying a :class:`meshlink.rpc.ErrorReply`;
 - ``wm/query``: the same for every request but transactions (read-only), so a router ACL can
   let read-only users read the world model without letting them write;
 - ``wm/elements/<id>``: storage-style reads, each element as JSON, so any Zenoh tool
@@ -49,15 +49,7 @@ async def serve_store(
     service = WmService(store)
     rpc_key = keys.wm_rpc()
 
-    async def rpc(query: IncomingQuery) -> list[Answer]:
-        data, ok = await service.handle_bytes(query.payload or b"")
-        return [Answer(key=rpc_key, payload=data, ok=ok)]
-
     read_key = keys.wm_query()
-
-    async def read(query: IncomingQuery) -> list[Answer]:
-        data, ok = await service.handle_bytes(query.payload or b"", read_only=True)
-        return [Answer(key=read_key, payload=data, ok=ok)]
 
     async def elements(query: IncomingQuery) -> list[Answer]:
         return _element_answers(store, keys.wm_element, query.key_expr)
@@ -71,8 +63,8 @@ async def serve_store(
             store.add_listener(publish)
             async with anyio.create_task_group() as tg:
                 await tg.start(store.run)
-                await tg.start(mesh.serve, rpc_key, rpc)
-                await tg.start(mesh.serve, read_key, read)
+                await tg.start(mesh.serve, rpc_key, service.rpc.serve_on(rpc_key))
+                await tg.start(mesh.serve, read_key, service.query.serve_on(read_key))
                 await tg.start(mesh.serve, keys.wm_elements(), elements)
                 if presence:
                     await tg.start(PresenceMonitor(mesh, store).run)

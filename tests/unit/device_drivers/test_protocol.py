@@ -10,6 +10,7 @@ import pytest
 import device_drivers as errors
 from device_drivers import ArmState, BaseState, GripperState, Pose2D, Twist2D, WorldPose
 from device_drivers import protocol as p
+from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, ErrorReply, WireError, encode
 
 
 @pytest.mark.parametrize(
@@ -33,23 +34,23 @@ from device_drivers import protocol as p
 )
 def test_requests_round_trip(command: p.Command) -> None:
     request = p.Request(command=command, progress_key="x")
-    assert p.decode_request(p.encode(request)) == request
+    assert p.decode_request(encode(request)) == request
 
 
 def test_replies_round_trip() -> None:
     arm = p.ArmStateReply(ArmState(joints={"elbow": 1.0}, tcp=WorldPose(0, 0, 1)))
     closed = p.Closed(GripperState(opening=0.05, holding="Gear-1", pads_in_contact=2))
     for reply in (arm, closed, p.Done(), p.DeviceInfo("arm", "r1-arm", "r1", "arm")):
-        assert p.decode_reply(p.encode(reply)) == reply
+        assert p.decode_reply(encode(reply)) == reply
 
 
 def test_the_base_velocity_is_a_field_with_a_default() -> None:
     moving = p.BaseStateReply(BaseState(pose=Pose2D(1.0), velocity=Twist2D(0.2, 0.0, -0.1)))
-    assert p.decode_reply(p.encode(moving)) == moving
+    assert p.decode_reply(encode(moving)) == moving
     old = {"reply": "base_state", "state": {"pose": {"x": 1.0, "y": 0.0, "yaw": 0.0}}}
     reply = p.decode_reply(msgspec.msgpack.encode(old))  # from a server before the field
     assert isinstance(reply, p.BaseStateReply) and reply.state.velocity == Twist2D()
-    with pytest.raises(msgspec.ValidationError):  # the duration stays bounded on the wire
+    with pytest.raises(WireError):  # the duration stays bounded on the wire
         p.decode_request(
             msgspec.msgpack.encode({"command": {"cmd": "set_velocity", "duration": 0.0}})
         )
@@ -61,12 +62,14 @@ def test_unknown_fields_are_tolerated_on_the_wire() -> None:
 
 
 def test_bad_requests_become_command_errors() -> None:
-    with pytest.raises(msgspec.ValidationError) as info:
+    with pytest.raises(WireError) as info:
         p.decode_request(msgspec.msgpack.encode({"command": {"cmd": "fly"}}))
     reply = p.error_reply(info.value)
-    assert reply.code == "CommandError" and "bad request" in reply.message
-    rebuilt = p.error_from_reply(p.encode(reply))
+    assert reply.code == BAD_REQUEST and "malformed request" in reply.message
+    rebuilt = p.error_from_reply(encode(reply))
     assert isinstance(rebuilt, errors.CommandError)
+    too_large = p.error_from_reply(encode(p.ErrorReply(code=TOO_LARGE, message="big")))
+    assert type(too_large) is errors.CommandError and str(too_large) == "big"
 
 
 @pytest.mark.parametrize(
@@ -80,7 +83,7 @@ def test_bad_requests_become_command_errors() -> None:
     ],
 )
 def test_device_errors_keep_their_class(exc: errors.DeviceError) -> None:
-    rebuilt = p.error_from_reply(p.encode(p.error_reply(exc)))
+    rebuilt = p.error_from_reply(encode(p.error_reply(exc)))
     assert type(rebuilt) is type(exc)
     assert str(rebuilt) == str(exc)
 
@@ -94,7 +97,7 @@ def test_unreachable_error_keeps_its_attributes() -> None:
         joints={"r1/elbow": 1.0},
         whole_body=False,
     )
-    rebuilt = p.error_from_reply(p.encode(p.error_reply(exc)))
+    rebuilt = p.error_from_reply(encode(p.error_reply(exc)))
     assert isinstance(rebuilt, errors.UnreachableError)
     assert rebuilt.position_error == 0.2 and rebuilt.joints == {"r1/elbow": 1.0}
     assert str(rebuilt) == str(exc)
@@ -102,11 +105,27 @@ def test_unreachable_error_keeps_its_attributes() -> None:
 
 def test_foreign_errors_and_plain_text() -> None:
     reply = p.error_reply(RuntimeError("boom"))
-    assert reply.code == "DeviceError" and "RuntimeError: boom" in reply.message
+    assert reply.code == INTERNAL and "RuntimeError: boom" in reply.message
+    rebuilt = p.error_from_reply(encode(reply))
+    assert type(rebuilt) is errors.DeviceError and "RuntimeError: boom" in str(rebuilt)
     text = p.error_from_reply(b"Cancelled: the server stopped before answering")
     assert isinstance(text, errors.DeviceUnavailableError)
-    unknown = p.error_from_reply(p.encode(p.ErrorReply(code="NoSuchError", message="?")))
+    assert str(text) == "the device server failed: Cancelled: the server stopped before answering"
+    unknown = p.error_from_reply(encode(p.ErrorReply(code="NoSuchError", message="?")))
     assert type(unknown) is errors.DeviceError
+
+
+def test_the_error_reply_is_meshlinks_tagged_with_details() -> None:
+    """The one wire change: the device ErrorReply carries the tag of every service's error,
+    so any client reads it; an untagged error of an older server still decodes."""
+    exc = errors.GraspLostError("r1-gripper lost Gear-1")
+    raw = msgspec.msgpack.decode(encode(p.error_reply(exc)))
+    assert raw["reply"] == "ErrorReply" and raw["code"] == "GraspLostError"
+    generic = msgspec.msgpack.decode(encode(p.error_reply(exc)), type=ErrorReply)
+    assert generic.code == "GraspLostError" and generic.message == str(exc)
+    old = {"code": "MotionTimeoutError", "message": "late", "details": {}, "schema_version": 1}
+    rebuilt = p.error_from_reply(msgspec.msgpack.encode(old))
+    assert type(rebuilt) is errors.MotionTimeoutError and str(rebuilt) == "late"
 
 
 NEW_MODULES = [

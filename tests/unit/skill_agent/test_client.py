@@ -247,7 +247,7 @@ async def test_the_skills_queryable_answers_list_skills_and_refuses_other_payloa
             reply = decode_reply(listing.payload)
             assert listing.ok and isinstance(reply, SkillsReply) and reply.agent == "a1"
         for payload, why in (
-            (b"\xc1 not msgpack", "undecodable request"),
+            (b"\xc1 not msgpack", "malformed request"),
             (encode(StartRun(skill="echo")), "answers ListSkills, not StartRun"),
         ):
             (refused,) = await m.get(key, payload)

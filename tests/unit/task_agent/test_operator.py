@@ -13,6 +13,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from meshlink.rpc import (
+    BAD_REQUEST,
+    DEFAULT_MAX_REQUEST_BYTES,
+    INTERNAL,
+    TOO_LARGE,
+    Decoder,
+    ErrorReply,
+    encode,
+)
+from meshlink.testing import check_reply, hostile_payloads, payloads
 from skill_agent.runtime import AgentCore
 from task_agent import parse_goal
 from task_agent.execution import OPERATOR_NOTE
@@ -20,9 +30,9 @@ from task_agent.operator import OperatorDesk, OperatorService, SkillMirror
 from task_agent.protocol import (
     AnswerPending,
     Call,
-    ErrorReply,
     ListPending,
     OkReply,
+    OperatorReply,
     PendingReply,
     Replanning,
     SeenAt,
@@ -30,7 +40,6 @@ from task_agent.protocol import (
     StepStarted,
     TaskFile,
     decode_operator_reply,
-    encode,
 )
 from task_agent.protocol import (
     Sequence as SequenceBlock,
@@ -49,20 +58,22 @@ class Person:
         self.desk, self.success, self.sightings = desk, success, list(sightings)
         self.seen: list[str] = []
 
-    def call(self, request: ListPending | AnswerPending) -> PendingReply | OkReply | ErrorReply:
-        data, _ = self.service.handle_bytes(encode(request))
+    async def call(
+        self, request: ListPending | AnswerPending
+    ) -> PendingReply | OkReply | ErrorReply:
+        data, _ = await self.service.handle_bytes(encode(request))
         return decode_operator_reply(data)
 
     async def run(self) -> None:
         while True:
-            listed = self.call(ListPending())
+            listed = await self.call(ListPending())
             assert isinstance(listed, PendingReply)
             for step in listed.pending:
                 self.seen.append(step.note)
                 answer = AnswerPending(
                     id=step.id, success=self.success, message="by hand", seen=self.sightings
                 )
-                assert isinstance(self.call(answer), OkReply)
+                assert isinstance(await self.call(answer), OkReply)
             await self.desk.wait_changed()
 
 
@@ -88,9 +99,9 @@ async def with_operator(
 async def test_desk_requests_are_listed_answered_and_withdrawn() -> None:
     desk = OperatorDesk()
     service = OperatorService("operator", desk)
-    garbage, ok = service.handle_bytes(b"\x93garbage")
+    garbage, ok = await service.handle_bytes(b"\x93garbage")
     assert not ok and isinstance(decode_operator_reply(garbage), ErrorReply)
-    unknown, ok = service.handle_bytes(encode(AnswerPending(id="7", success=True)))
+    unknown, ok = await service.handle_bytes(encode(AnswerPending(id="7", success=True)))
     reply = decode_operator_reply(unknown)
     assert not ok and isinstance(reply, ErrorReply) and reply.code == "unknown_request"
     with pytest.raises(KeyError, match="no pending operator request '1'"):
@@ -208,10 +219,39 @@ async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
         assert no.outcome == "failed" and "(precondition)" in no.message
 
 
+SAFE_SAMPLES = [encode(ListPending()), encode(AnswerPending(id="abcd", success=True))]
+REPLIES: Decoder[OperatorReply] = Decoder(OperatorReply)
+
+
+@pytest.mark.anyio
+async def test_hostile_operator_requests_get_a_decodable_reply() -> None:
+    desk = OperatorDesk()
+    service = OperatorService("operator", desk)
+    bad_utf8 = SAFE_SAMPLES[1].replace(b"\xa4abcd", b"\xa4\xff\xfe\xc3\x28")
+    cases = [  # payload, code, words of the message
+        (b"", BAD_REQUEST, "malformed request"),
+        (bad_utf8, BAD_REQUEST, "invalid UTF-8"),
+        (b"\x81\xa1a" * 1000 + b"\xc0", BAD_REQUEST, "nested too deeply"),
+        (b"\x91" * 1000 + b"\xc0", BAD_REQUEST, "malformed request"),
+        (msgspec.msgpack.encode({"request": "Nope"}), BAD_REQUEST, "'Nope'"),
+        (b"\x00" * (DEFAULT_MAX_REQUEST_BYTES + 1), TOO_LARGE, "exceeds the limit"),
+        (SAFE_SAMPLES[1], "unknown_request", "no pending operator request 'abcd'"),
+    ]
+    for payload, code, words in cases:
+        data, ok = await service.handle_bytes(payload)
+        reply = check_reply(data, ok, REPLIES)
+        assert isinstance(reply, ErrorReply) and reply.code == code and words in reply.message
+    for payload in hostile_payloads(SAFE_SAMPLES):
+        data, ok = await service.handle_bytes(payload)
+        reply = check_reply(data, ok, REPLIES)
+        assert not isinstance(reply, ErrorReply) or reply.code != INTERNAL, reply
+    assert desk.pending() == []
+
+
 @settings(max_examples=150, deadline=None, database=None)
 @given(
     payload=st.one_of(
-        st.binary(max_size=48),
+        payloads(SAFE_SAMPLES),
         st.builds(
             lambda r, i, ok: msgspec.msgpack.encode({"request": r, "id": i, "success": ok}),
             st.sampled_from(["ListPending", "AnswerPending", "Nope"]),
@@ -222,7 +262,10 @@ async def test_a_call_may_ask_for_the_operator_and_a_refusal_does_not() -> None:
 )
 def test_fuzzed_operator_requests_get_a_reply_and_answer_nothing(payload: bytes) -> None:
     desk = OperatorDesk()
-    data, ok = OperatorService("operator", desk).handle_bytes(payload)
-    reply = decode_operator_reply(data)
-    assert isinstance(reply, PendingReply) if ok else isinstance(reply, ErrorReply)
+    data, ok = anyio.run(OperatorService("operator", desk).handle_bytes, payload)
+    reply = check_reply(data, ok, REPLIES)
+    if ok:
+        assert isinstance(reply, PendingReply), reply
+    else:
+        assert isinstance(reply, ErrorReply) and reply.code != INTERNAL, reply
     assert desk.pending() == []

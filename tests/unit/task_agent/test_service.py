@@ -1,6 +1,6 @@
 """The task service without Zenoh (in-process agents): submit, status, list, abort, task files
-verified before they run, refusals with codes, and fuzzed input that never crashes the service
-or creates a task."""
+verified before they run, refusals with codes, and hostile or fuzzed input that always gets a
+decodable reply and never crashes the service or creates a task."""
 
 from __future__ import annotations
 
@@ -14,9 +14,18 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from meshlink.rpc import (
+    BAD_REQUEST,
+    DEFAULT_MAX_REQUEST_BYTES,
+    INTERNAL,
+    TOO_LARGE,
+    Decoder,
+    ErrorReply,
+    encode,
+)
+from meshlink.testing import check_reply, hostile_payloads, payloads
 from task_agent.protocol import (
     AbortTask,
-    ErrorReply,
     ListTasks,
     OkReply,
     StepStarted,
@@ -32,7 +41,6 @@ from task_agent.protocol import (
     VerifyFile,
     VerifyReply,
     decode_reply,
-    encode,
 )
 from task_agent.service import TaskService
 from tests.assets.task_fleet import PLANNER, Fleet, fleet
@@ -112,7 +120,7 @@ async def test_refusals_carry_codes() -> None:
                       "bad_request", "'/'")  # fmt: skip
         await refused(tasks, TaskStatus(task_id="nope"), "unknown_task", "no task 'nope'")
         await refused(tasks, AbortTask(task_id="nope"), "unknown_task", "no task 'nope'")
-        await refused(tasks, b"\xc1", "bad_request", "undecodable")
+        await refused(tasks, b"\xc1", "bad_request", "malformed request")
         await refused(tasks, SubmitFile(text="[root"), "verification", "invalid TOML")
         typo = TaskOptions(operator_fallback_skills=frozenset({"pick", "pik"}))
         why = "operator fallback: no registered agent offers pik (skills: navigate, pick,"
@@ -170,6 +178,36 @@ async def test_task_files_are_verified_before_they_run() -> None:
         assert tasks.tasks()[0].name == "kit one gear"
 
 
+SAFE_SAMPLES = [  # valid requests that start nothing
+    encode(ListTasks()),
+    encode(TaskStatus(task_id="abcd")),
+    encode(AbortTask(task_id="abcd")),
+    encode(VerifyFile(text="root = 3")),
+]
+REPLIES: Decoder[TaskReply] = Decoder(TaskReply)
+
+
+@pytest.mark.anyio
+async def test_hostile_payloads_get_a_decodable_reply() -> None:
+    bad_utf8 = encode(TaskStatus(task_id="abcd")).replace(b"\xa4abcd", b"\xa4\xff\xfe\xc3\x28")
+    cases = [  # payload, code, words of the message
+        (b"", BAD_REQUEST, "malformed request"),
+        (bad_utf8, BAD_REQUEST, "invalid UTF-8"),
+        (b"\x81\xa1a" * 1000 + b"\xc0", BAD_REQUEST, "nested too deeply"),
+        (b"\x91" * 1000 + b"\xc0", BAD_REQUEST, "malformed request"),
+        (msgspec.msgpack.encode({"request": "Nope"}), BAD_REQUEST, "'Nope'"),
+        (b"\x00" * (DEFAULT_MAX_REQUEST_BYTES + 1), TOO_LARGE, "exceeds the limit"),
+    ]
+    async with service() as (_, tasks):
+        for payload, code, words in cases:
+            await refused(tasks, payload, code, words)
+        for payload in hostile_payloads(SAFE_SAMPLES):
+            data, ok = await tasks.handle_bytes(payload)
+            reply = check_reply(data, ok, REPLIES)
+            assert not isinstance(reply, ErrorReply) or reply.code != INTERNAL, reply
+        assert tasks.tasks() == []
+
+
 @pytest.fixture(scope="module")
 def fuzz_target() -> Iterator[tuple[anyio.from_thread.BlockingPortal, TaskService]]:
     with (
@@ -192,7 +230,7 @@ _values = st.one_of(
     st.dictionaries(st.text(max_size=4), _ints, max_size=2),
 )
 FUZZ = st.one_of(
-    st.binary(max_size=64),
+    payloads(SAFE_SAMPLES),
     st.builds(lambda r, v: msgspec.msgpack.encode({"request": r, "x": v}), _requests, _values),
     st.builds(
         lambda r, k, v: msgspec.msgpack.encode({"request": r, k: v}),
@@ -217,9 +255,9 @@ def test_fuzzed_requests_never_crash_or_start_a_task(
     portal, tasks = fuzz_target
     before = len(tasks.tasks())
     data, ok = portal.call(tasks.handle_bytes, payload)
-    reply = decode_reply(data)
+    reply = check_reply(data, ok, REPLIES)
     if not ok:
         assert isinstance(reply, ErrorReply) and reply.code and reply.message
-        assert reply.code != "internal", reply
+        assert reply.code != INTERNAL, reply
     if not isinstance(reply, TaskAccepted):
         assert len(tasks.tasks()) == before

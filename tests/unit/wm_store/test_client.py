@@ -13,6 +13,8 @@ from wm_store import (
     DeviceSpec,
     ElementNotFoundError,
     InMemoryTransport,
+    ProtocolError,
+    RemoteError,
     RevisionTimeoutError,
     RobotRegistration,
     SkillSpec,
@@ -23,6 +25,8 @@ from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
     Change,
+    ErrorReply,
+    Info,
     Relation,
     Reply,
     Request,
@@ -252,6 +256,39 @@ async def test_no_store_gives_transport_error(ontology: Ontology) -> None:
     with pytest.raises(TransportError):
         async with WmClient.connect(Dead(WmService(store)), ontology):
             pass
+
+
+@pytest.mark.parametrize(
+    ("code", "raised", "words"),
+    [
+        ("bad_request", ProtocolError, "malformed"),
+        ("too_large", ProtocolError, "split the transaction"),
+        ("protocol_error", ProtocolError, "malformed"),
+        ("conflict", ConflictError, "malformed"),
+        ("internal", RemoteError, "[internal] malformed"),
+        ("from_a_newer_store", RemoteError, "[from_a_newer_store]"),
+    ],
+)
+async def test_error_replies_raise_by_code(
+    ontology: Ontology, code: str, raised: type[Exception], words: str
+) -> None:
+    """meshlink's standard codes ``bad_request`` and ``too_large`` raise :class:`ProtocolError`
+    (``except ProtocolError`` catches a malformed or oversized request); the store's own codes
+    their class; any other code a :class:`RemoteError` that keeps it."""
+
+    class Refusing(InMemoryTransport):
+        async def request(self, request: Request, *, timeout: float) -> Reply:
+            if isinstance(request, Info):
+                return ErrorReply(code=code, message="malformed request")
+            return await super().request(request, timeout=timeout)
+
+    store = await WmStore.open(ontology)
+    async with WmClient.connect(Refusing(WmService(store)), ontology) as wm:
+        with pytest.raises(raised) as caught:
+            await wm.info()
+    assert words in str(caught.value)
+    if isinstance(caught.value, RemoteError):
+        assert caught.value.remote_code == code
 
 
 async def test_reasoners_through_the_client(ontology: Ontology) -> None:

@@ -82,6 +82,15 @@ async def check_taught(store: WmStore, before: SnapshotReply) -> None:
             await s.transact(Transact(ops=[bad]))
 
 
+async def copy_as_a_crash_leaves_it(store: WmStore, live: Path, crash: Path) -> None:
+    """Copy the data directory at one point in time: holding the snapshot and log I/O limiters
+    keeps a periodic snapshot write and the log compaction after it out of the copy."""
+    durability = store._durability
+    assert durability is not None
+    async with durability._snapshot_io, durability._wal_io:
+        await anyio.to_thread.run_sync(shutil.copytree, live, crash)
+
+
 @pytest.mark.parametrize("snapshot_every", [10_000, 2], ids=["log-only", "snapshots-and-log"])
 async def test_taught_classes_and_templates_survive_a_crash(
     ontology: Ontology, tmp_path: Path, snapshot_every: int
@@ -91,7 +100,7 @@ async def test_taught_classes_and_templates_survive_a_crash(
     async with running(store) as s:
         before = await teach_and_use(s)
         # What a crash right now leaves on disk: every acknowledged commit, no final snapshot.
-        await anyio.to_thread.run_sync(shutil.copytree, tmp_path / "live", tmp_path / "crash")
+        await copy_as_a_crash_leaves_it(s, tmp_path / "live", tmp_path / "crash")
     if snapshot_every == 10_000:
         assert not list((tmp_path / "crash" / "snapshots").glob("*.snap")), "log replay only"
     crashed = await WmStore.open(ontology, StoreConfig(data_dir=str(tmp_path / "crash")))

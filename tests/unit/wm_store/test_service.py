@@ -8,6 +8,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from meshlink.rpc import Decoder
+from meshlink.testing import check_reply, hostile_payloads
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
@@ -21,6 +23,7 @@ from wm_store.protocol import (
     Relation,
     Relations,
     RelationsReply,
+    Reply,
     Resolve,
     Transact,
     TransactReply,
@@ -69,10 +72,10 @@ async def test_good_requests(ontology: Ontology) -> None:
 @pytest.mark.parametrize(
     ("data", "code", "words"),
     [
-        (b"", "protocol_error", "malformed"),
-        (b"\xc1\xff\x00garbage", "protocol_error", "malformed"),
-        (msgspec.msgpack.encode({"request": "Nope"}), "protocol_error", "Nope"),
-        (msgspec.msgpack.encode({"request": "GetElements", "ids": 5}), "protocol_error", "ids"),
+        (b"", "bad_request", "malformed"),
+        (b"\xc1\xff\x00garbage", "bad_request", "malformed"),
+        (msgspec.msgpack.encode({"request": "Nope"}), "bad_request", "Nope"),
+        (msgspec.msgpack.encode({"request": "GetElements", "ids": 5}), "bad_request", "ids"),
         (encode(GetElements(ids=["Gear-99"])), "not_found", "Gear-99"),
         (encode(Resolve(query=Query(type="Gaer"))), "unknown_class", "Gear"),
         (
@@ -81,7 +84,7 @@ async def test_good_requests(ontology: Ontology) -> None:
             "mass",
         ),
         (encode(ChangesSince(revision=50)), "conflict", "ahead"),
-        (b"\x00" * (70 * 1024), "protocol_error", "limit"),
+        (b"\x00" * (70 * 1024), "too_large", "limit"),
     ],
 )
 async def test_bad_input_gets_named_error(
@@ -142,3 +145,59 @@ def test_fuzzed_structured_requests(ontology: Ontology, payload: dict[str, objec
             assert service.store.snapshot() == before
 
     anyio.run(check)
+
+
+INFO_WITH = b"\x82\xa7request\xa4Info\xa1x"  # {"request": "Info", "x": <what follows>}
+
+
+@pytest.mark.parametrize("read_only", [False, True], ids=["wm-rpc", "wm-query"])
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        (b"\x81\xa7request\xa1\xff", "UTF-8"),  # {"request": "<0xff>"}
+        (b"\x82\xa7request\xabGetElements\xa3ids\x91\xa1\xff", "UTF-8"),  # ids=["<0xff>"]
+        (INFO_WITH + b"\x91" * 1000 + b"\xc0", "nested"),  # arrays 1,000 deep
+        (INFO_WITH + b"\x81\xa1a" * 1000 + b"\xc0", "nested"),  # maps 1,000 deep
+    ],
+    ids=["utf8-tag", "utf8-value", "deep-arrays", "deep-maps"],
+)
+async def test_malformed_utf8_and_deep_nesting_are_named(
+    ontology: Ontology, data: bytes, words: str, read_only: bool
+) -> None:
+    """Invalid UTF-8 (UnicodeDecodeError) and nesting 1,000 deep (RecursionError) escape
+    msgspec's own errors: both still answer a ``bad_request`` ErrorReply."""
+    service = await make_service(ontology)
+    out, ok = await service.handle_bytes(data, read_only=read_only)
+    reply = decode_reply(out)
+    assert not ok and isinstance(reply, ErrorReply), reply
+    assert reply.code == "bad_request" and words in reply.message, reply
+
+
+@pytest.mark.parametrize("read_only", [False, True], ids=["wm-rpc", "wm-query"])
+async def test_hostile_payloads_get_typed_replies(ontology: Ontology, read_only: bool) -> None:
+    """Empty, undecodable, invalid UTF-8, deep nesting, unknown tags, huge payloads and the
+    mutations of valid requests: every reply decodes as a :data:`Reply`, an ErrorReply exactly
+    when ``ok`` is False, and the state is unchanged (a transaction, even empty, commits a
+    revision: only the read-only endpoint, which refuses it, gets one)."""
+    service = await make_service(ontology)
+    before = service.store.snapshot()
+    samples = [
+        encode(Info()),
+        encode(GetElements(ids=["Gear-1"])),
+        encode(Resolve(query=Query(type="Part"))),
+    ]
+    if read_only:
+        samples.append(encode(Transact(ops=[AddElement(type="Gear")])))
+    replies = Decoder[Reply](Reply)
+    payloads = hostile_payloads(samples, huge=service.max_request_bytes + 1)
+    codes: set[str] = set()
+    for payload in payloads:
+        out, ok = await service.handle_bytes(payload, read_only=read_only)
+        check_reply(out, ok, replies)
+        reply = decode_reply(out)
+        assert ok != isinstance(reply, ErrorReply), (payload[:80], reply)
+        if isinstance(reply, ErrorReply):
+            codes.add(reply.code)
+    assert {"bad_request", "too_large"} <= codes
+    assert codes <= {"bad_request", "too_large", "protocol_error", "not_found"}, codes
+    assert service.store.snapshot() == before

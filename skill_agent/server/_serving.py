@@ -1,0 +1,193 @@
+"""Serving an agent: registration in the world model, queryables, token, publisher;
+``skimesh agent`` end to end."""
+
+from __future__ import annotations
+
+import logging
+import socket
+from collections.abc import Mapping
+from pathlib import Path
+
+import anyio
+import msgspec
+from anyio.abc import TaskStatus
+
+from meshlink import Mesh
+from skill_agent.protocol._skills import SkillDescription
+from skill_agent.runtime._agent import AgentCore
+from skill_agent.runtime._config import AgentConfig
+from skill_agent.runtime._event_log import EventLog
+from skill_agent.runtime._plugins import SkillRegistry
+from skill_agent.runtime._simulated import SimulatedOutcomes
+from skill_agent.runtime._wiring import bind_devices, bind_hardware
+from skill_agent.server._publisher import RunEventPublisher
+from skill_agent.server._service import AgentService
+from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
+from wm_store.ontology import Ontology, core_ontology_path
+
+__all__ = ["agent_registration", "run_agent", "serve_agent", "simulated_outcomes"]
+
+_log = logging.getLogger(__name__)
+_json = msgspec.json.Encoder()
+
+
+def agent_registration(
+    config: AgentConfig, skills: list[SkillDescription], *, address: str = ""
+) -> RobotRegistration:
+    """What the agent writes into the world model (agent, robot, devices, skills)."""
+    return RobotRegistration(
+        agent=config.name,
+        agent_type=config.agent_type,
+        address=address,
+        hostname=socket.gethostname(),
+        robot_type=config.robot.type,
+        robot_label=config.robot_label,
+        robot_properties=dict(config.robot.properties),
+        devices=[
+            DeviceSpec(type=d.type, label=d.label, properties=d.properties) for d in config.devices
+        ],
+        skills=[
+            SkillSpec(name=d.name, skill_type=d.family, description=_json.encode(d).decode())
+            for d in skills
+        ],
+    )
+
+
+async def _register(
+    wm: WmClient,
+    core: AgentCore,
+    config: AgentConfig,
+    address: str,
+    drivers: Mapping[str, object] | None,
+) -> None:
+    await wm.register_robot(agent_registration(config, core.descriptions(), address=address))
+    agents = wm.resolve_element(type="Agent", label=config.name)
+    controlled = [r.object for a in agents for r in wm.query_relation(a.id, "controls")]
+    core.robot = controlled[0] if controlled else None  # its hasA devices are the hardware
+    if drivers is not None:  # in place: the runs' environment holds this very dict
+        core.devices.clear()
+        core.devices.update(bind_devices(wm, config.device_labels, drivers, robot=core.robot))
+    core.hardware.update(bind_hardware(wm, config.hardware, robot=core.robot))
+
+
+async def serve_agent(
+    mesh: Mesh,
+    core: AgentCore,
+    *,
+    config: AgentConfig,
+    wm: WmClient,
+    registry: SkillRegistry | None = None,
+    drivers: Mapping[str, object] | None = None,
+    unregister_timeout: float = 5.0,
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
+) -> None:
+    """Run ``core`` and serve it on ``mesh`` until cancelled (see the module docstring);
+    ``started`` once the agent is registered, wired and reachable. ``drivers``: device
+    drivers by world-model label; given, they replace ``core.devices`` (bound by label).
+
+    Raises:
+        WmError: the registration was refused or the store is unreachable.
+        WiringError: a device label of the configuration names no element or several.
+    """
+    keys, name = mesh.keys, core.name
+    address = keys.agent(name)
+
+    async def reregister() -> None:
+        await _register(wm, core, config, address, drivers)
+
+    service = AgentService(core, registry=registry, on_reload=reregister)
+
+    publisher = RunEventPublisher(mesh, name)
+    unsubscribe = publisher.attach(core)
+    token = None
+    try:
+        async with anyio.create_task_group() as tg:
+            tg.start_soon(publisher.run)
+            await tg.start(core.run)
+            skills_key, rpc_key = keys.agent_skills(name), keys.agent_rpc(name)
+            await tg.start(mesh.serve, skills_key, service.skills.serve_on(skills_key))
+            await tg.start(mesh.serve, rpc_key, service.rpc.serve_on(rpc_key))
+            token = mesh.declare_token(address)
+            await reregister()
+            _log.warning(
+                "agent %s ready on mesh %r: %d skills (%s)%s",
+                name,
+                keys.mesh,
+                len(core.descriptions()),
+                ", ".join(d.name for d in core.descriptions()),
+                ", simulated outcomes" if core.simulated is not None else "",
+            )
+            task_status.started()
+    finally:
+        unsubscribe()
+        publisher.flush()  # what runs preempted at shutdown left pending, their results too
+        with anyio.CancelScope(shield=True):
+            if token is not None:
+                with anyio.move_on_after(unregister_timeout):
+                    try:
+                        await wm.unregister_robot(name)
+                    except WmError as e:
+                        _log.warning("agent %s could not unregister: %s", name, e)
+                token.undeclare()
+        _log.info("agent %s stopped", name)
+
+
+def _ontology(config: AgentConfig) -> Ontology:
+    if not config.ontology:
+        return Ontology.default()
+    return Ontology.load(core_ontology_path(), *(Path(p) for p in config.ontology))
+
+
+def simulated_outcomes(config: AgentConfig, *, force: bool = False) -> SimulatedOutcomes | None:
+    """The config's simulated-outcome settings, or None when the mode is off."""
+    sim = config.simulation
+    if not (force or sim.enabled):
+        return None
+    default = 1.0 if sim.default is None else sim.default
+    return SimulatedOutcomes(sim.probabilities, default, sim.seed, time_scale=sim.time_scale)
+
+
+async def run_agent(
+    mesh: Mesh,
+    config: AgentConfig,
+    *,
+    simulate: bool = False,
+    drivers: Mapping[str, object] | None = None,
+    wm_timeout: float = 5.0,
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
+) -> None:
+    """Everything ``skimesh agent`` does: join the world model, load and check the skills,
+    build the core and serve it until cancelled. ``simulate`` forces simulated outcomes.
+    ``drivers``: device drivers by world-model label (``driver.name``), bound to the agent's
+    devices and hardware bindings by label (see the module doc); None: no drivers.
+
+    Raises:
+        SkillLoadError: a skill or the config does not load (WiringError: a device label
+            names no element). WmError: no world model.
+    """
+    ontology = await anyio.to_thread.run_sync(_ontology, config)
+    transport = ZenohTransport(mesh)
+    async with WmClient.connect(transport, ontology, author=config.name, timeout=wm_timeout) as wm:
+        registry = SkillRegistry.from_config(config, wm.ontology, context={"mesh": mesh})
+        entries = await anyio.to_thread.run_sync(registry.load)
+        config.check_skill_names(entries)
+        log_path = Path(config.event_log) if config.event_log else None
+        with EventLog(log_path) as events:
+            core = AgentCore(
+                name=config.name,
+                wm=wm,
+                skills=entries,
+                events=events,
+                simulated=simulated_outcomes(config, force=simulate),
+                preempt_timeout=config.preempt_timeout,
+                registry=registry.conditions,
+            )
+            await serve_agent(
+                mesh,
+                core,
+                config=config,
+                wm=wm,
+                registry=registry,
+                drivers=drivers,
+                task_status=task_status,
+            )

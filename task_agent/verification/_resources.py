@@ -1,0 +1,67 @@
+"""Resources: the devices a call locks, and calls that may run at the same time locking the
+same device (an agent runs one skill per device at a time and refuses the second start)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from skill_agent import WorldView
+from wm_store.scene import SceneState, id_sort_key
+
+from ..taskfile import CallSite, where
+from ._attempt import Attempt, is_of
+
+__all__ = ["call_locks", "resource_problems"]
+
+_AGENT = "agent:"
+"""The lock of a whole agent whose devices for a call are not known."""
+
+
+def call_locks(att: Attempt, view: WorldView, *, fixed: bool) -> set[str]:
+    """The devices the call locks (see :mod:`task_agent.verification`): bound at run time as
+    :func:`~skill_agent.parameters.specify` binds them (the agent's first device of the class)."""
+    locks: set[str] = set()
+    known = att.values if fixed and att.values is not None else att.given
+    for spec in att.desc.parameters:
+        value = known.get(spec.name)
+        if spec.kind != "hardware" or (value is None and (spec.optional or not fixed)):
+            continue
+        if value is None:
+            devices = sorted(att.agent.hardware, key=id_sort_key)
+            value = next(
+                (d for d in devices if is_of(view, d, spec.type)), f"{_AGENT}{att.agent.name}"
+            )
+        if isinstance(value, str):
+            locks.add(value)
+    return locks
+
+
+def resource_problems(
+    calls: Mapping[str, CallSite], locks: Mapping[str, set[str]], state: SceneState
+) -> list[tuple[str, str]]:
+    """``(call path, problem)`` for each call that may run at the same time as an earlier one
+    locking a device it locks too (``locks``: each call's :func:`call_locks`)."""
+    out = []
+    for site in calls.values():
+        mine, found = locks.get(site.path, set()), []
+        for other in site.parallel:
+            common = mine & locks.get(other, set())
+            if common and calls[other].order < site.order:
+                what = ", ".join(_device(d, state) for d in sorted(common, key=id_sort_key))
+                found.append(f"{where(other, calls[other].call)} (both lock {what})")
+        if found:
+            message = (
+                f"may run at the same time as {'; '.join(found)}: an agent runs one skill "
+                "per device at a time and refuses the second start; order them in a "
+                "sequence or use other devices"
+            )
+            out.append((site.path, message))
+    return out
+
+
+def _device(lock: str, state: SceneState) -> str:
+    if lock.startswith(_AGENT):
+        return f"agent {lock[len(_AGENT) :]} (its devices for these calls are not known)"
+    element = state.get(lock)
+    label = element.label if element is not None else ""
+    return f"{lock} ({label})" if label and label != lock else lock
