@@ -4,11 +4,13 @@ asyncio is the supported backend (anyio on asyncio): the loop hand-off below use
 loop's ``call_soon_threadsafe``; there is no trio path.
 
 Zenoh-python has no async API. Its calls are short synchronous Rust calls that release the GIL
-and are made directly on the loop; only opening and closing a session go through
-``anyio.to_thread``, and publications that may block go through the mesh's sender thread
-(``meshlink._sender``). What Zenoh *delivers* (replies, queries, samples, drop notifications)
-arrives on other threads through ``zenoh.handlers.Callback``; each callback here only appends
-to a list or deque and, at most, schedules one wake-up of the loop:
+and are made directly on the loop, except those that may wait for the network: opening and
+closing a session and sending a query go through ``anyio.to_thread`` (a query waits, like a
+publication, while the session's send queue is full: a congested link or a stalled
+subscriber), and publications go through the mesh's sender thread (``meshlink._sender``).
+What Zenoh *delivers* (replies, queries, samples, drop notifications) arrives on other threads
+through ``zenoh.handlers.Callback``; each callback here only appends to a list or deque and, at
+most, schedules one wake-up of the loop:
 
 * replies of a ``get``: ``indirect=False``, on Zenoh's thread with the GIL held (the default
   ``indirect=True`` would start a Python thread per call);
@@ -299,14 +301,17 @@ async def run_query(
     token = zenoh.CancellationToken()
     in_flight.add(1)
     try:
-        session.get(
-            selector,
-            zenoh.handlers.Callback(on_reply, on_drop, indirect=False),
-            payload=payload,
-            timeout=timeout,
-            target=target,
-            consolidation=zenoh.ConsolidationMode.NONE,  # stream replies, keep duplicates
-            cancellation_token=token,
+        # From a worker thread: with the send queue full, get() waits for room (BLOCK).
+        await anyio.to_thread.run_sync(
+            lambda: session.get(
+                selector,
+                zenoh.handlers.Callback(on_reply, on_drop, indirect=False),
+                payload=payload,
+                timeout=timeout,
+                target=target,
+                consolidation=zenoh.ConsolidationMode.NONE,  # stream replies, keep duplicates
+                cancellation_token=token,
+            )
         )
         with anyio.move_on_after(timeout + _TIMEOUT_GRACE):
             await finished.wait()

@@ -9,6 +9,7 @@ callback threads would hang interpreter exit).
 from __future__ import annotations
 
 import asyncio
+import gc
 import time
 import uuid
 from collections.abc import Iterator
@@ -95,9 +96,16 @@ class SlowSteps:
 
 
 @pytest.fixture
-def blocking_detector(monkeypatch: pytest.MonkeyPatch) -> SlowSteps:
+def blocking_detector(monkeypatch: pytest.MonkeyPatch) -> Iterator[SlowSteps]:
     """Time every loop step for the test (see :class:`SlowSteps`), so a test can
-    ``assert not detector.reports``."""
+    ``assert not detector.reports``.
+
+    The test runner's heap (every module and object the session has made so far) is collected
+    and frozen for the test, as ``skimesh sim`` settles its own after start-up: otherwise a
+    full collection of it, started by whichever thread allocates, holds the GIL for longer
+    than the loop may be blocked, and the test would measure pytest's heap, not the code."""
+    gc.collect()
+    gc.freeze()
     detector = SlowSteps()
     run = asyncio.Handle._run
 
@@ -109,4 +117,7 @@ def blocking_detector(monkeypatch: pytest.MonkeyPatch) -> SlowSteps:
             detector.observe(handle, time.perf_counter() - wall, time.thread_time() - cpu)
 
     monkeypatch.setattr(asyncio.Handle, "_run", timed)
-    return detector
+    try:
+        yield detector
+    finally:
+        gc.unfreeze()

@@ -9,11 +9,10 @@ gripper's actuator may not. :func:`gripper_drive` returns the drive of a robot's
   closed through a four-bar linkage). The opening is measured as the gap between the inner
   faces of the two pads along the tool's closing axis. The control for an opening comes from a
   calibration made once, when the world is built: the gripper file alone, without gravity, is
-  stepped to rest at a few controls and the gap measured at each (``~15 ms``); between those
-  points it is interpolated (the 2F-85's gap is within 2 mm of linear in its control). A
+  stepped to rest at a few controls and the gap measured at each (its cost: docs/benchmarks.md,
+  section Robot models and IK); between those points it is interpolated. A
   squeeze force ``f`` sets the actuator's force limit to ``f / gripper_force`` of the file's
-  own limit (``gripper_force``: the rated force of :class:`~scenario.
-  RobotSpec`).
+  own limit (``gripper_force``: the rated force of :class:`~scenario.RobotSpec`).
 """
 
 from __future__ import annotations

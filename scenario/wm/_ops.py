@@ -77,9 +77,7 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.reasoners import Transform
-
-from ._poses import quat_from_axes, quat_from_yaw, to_wm_pose
+from wm_store.reasoners import Transform, quat_from_axes, quat_from_yaw
 
 __all__ = [
     "DOOR_HALF_THICKNESS",
@@ -145,7 +143,7 @@ def _door(a: ApplianceEntry, p: WorldPlacement) -> dict[str, Value]:
     body = Transform((p.x, p.y, p.z), quat_from_yaw(p.yaw))
     centre = body.compose(Transform((d + DOOR_HALF_THICKNESS, 0.0, h / 2), flip))
     size = SizeCuboid(x=2 * DOOR_HALF_THICKNESS, y=a.size[1], z=h)
-    return {Prop.pose: to_wm_pose(centre), Prop.size: size}
+    return {Prop.pose: centre.to_pose(), Prop.size: size}
 
 
 def _drawer(f: FurnitureEntry) -> dict[str, Value]:
@@ -159,7 +157,7 @@ def _drawer(f: FurnitureEntry) -> dict[str, Value]:
     (hx, hy, hz), (cx, cy, cz) = layout.handle, layout.centre
     q = quat_from_axes((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, -1.0))
     return {
-        Prop.pose: to_wm_pose(centre),
+        Prop.pose: centre.to_pose(),
         Prop.size: SizeCuboid(*layout.size),
         Prop.drawerOpen: False,
         Prop.graspPose: Pose(Position(hx - cx, hy - cy, hz - cz), Orientation(*q)),

@@ -19,15 +19,8 @@ from collections.abc import Mapping
 
 from device_drivers import Arm, ProgressCallback, WorldPose
 from skill_agent.primitives._supervise import sub_progress, supervise
-from skill_agent.primitives.poses import (
-    Vec3,
-    axis,
-    cross,
-    quat_from_axes,
-    rotated_z,
-    translated,
-    unit,
-)
+from skill_agent.primitives.poses import Vec3, axis, cross, rotated_z, translated, unit
+from wm_store.reasoners import quat_from_axes
 
 __all__ = ["approach", "look_at", "move_cartesian", "move_joints", "move_to", "retreat"]
 

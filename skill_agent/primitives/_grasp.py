@@ -36,13 +36,12 @@ from skill_agent.primitives.poses import (
     axis,
     cross,
     dot,
-    quat_from_axes,
     to_transform,
     to_world_pose,
     translated,
 )
 from wm_store.protocol import Pose, SizeCuboid, SizeCylinder, SizeSphere, Value
-from wm_store.reasoners import Transform
+from wm_store.reasoners import Transform, quat_from_axes
 
 __all__ = [
     "Grasp",

@@ -25,8 +25,6 @@ __all__ = [
     "compose",
     "cross",
     "dot",
-    "quat_from_axes",
-    "quat_from_yaw",
     "rotated_z",
     "to_transform",
     "to_wm_pose",
@@ -61,35 +59,6 @@ def axis(q: Quat, index: int) -> Vec3:
     points in the world."""
     basis: Vec3 = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))[index]
     return quat_rotate(q, basis)
-
-
-def quat_from_axes(x: Vec3, y: Vec3, z: Vec3) -> Quat:
-    """The rotation whose columns are the orthonormal axes ``x``, ``y``, ``z`` (Shepperd's
-    method, numerically safe for every rotation)."""
-    m00, m10, m20 = x
-    m01, m11, m21 = y
-    m02, m12, m22 = z
-    trace = m00 + m11 + m22
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = ((m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s, 0.25 * s)
-    elif m00 > m11 and m00 > m22:
-        s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
-        q = (0.25 * s, (m01 + m10) / s, (m02 + m20) / s, (m21 - m12) / s)
-    elif m11 > m22:
-        s = 2.0 * math.sqrt(1.0 + m11 - m00 - m22)
-        q = ((m01 + m10) / s, 0.25 * s, (m12 + m21) / s, (m02 - m20) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + m22 - m00 - m11)
-        q = ((m02 + m20) / s, (m12 + m21) / s, 0.25 * s, (m10 - m01) / s)
-    n = math.sqrt(sum(c * c for c in q))
-    qx, qy, qz, qw = (c / n for c in q)
-    return (qx, qy, qz, qw) if qw >= 0 else (-qx, -qy, -qz, -qw)
-
-
-def quat_from_yaw(yaw: float) -> Quat:
-    """Rotation by ``yaw`` radians about the world z axis."""
-    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
 
 
 def yaw_of(q: Quat) -> float:

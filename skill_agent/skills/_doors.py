@@ -25,13 +25,13 @@ from scenario import DOOR_HANDLE_INSET, DOOR_HANDLE_STANDOFF
 from skill_agent._skill import Skill, SkillContext
 from skill_agent.primitives._arm import approach, move_cartesian, retreat
 from skill_agent.primitives._gripper import close_gripper, open_gripper
-from skill_agent.primitives.poses import Vec3, axis, cross, quat_from_axes
+from skill_agent.primitives.poses import Vec3, axis, cross
 from skill_agent.protocol._skills import Condition, ParamSpec, RelationCond, SkillDescription
 from skill_agent.skills._manipulation import arm_of, gripper_of, make_safe
 from skill_agent.skills._params import ARM, GRIPPER, LOCATION, ROBOT, at, door_is, empty, offline
 from skill_agent.skills._support import element_id, failure, float_param, geometry, tracked, wm_of
 from wm_store.ontology import Cls, Rel
-from wm_store.reasoners import Transform
+from wm_store.reasoners import Transform, quat_from_axes
 
 __all__ = ["ArmCloseDoor", "ArmOpenDoor", "handle_pose"]
 

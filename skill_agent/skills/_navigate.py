@@ -17,7 +17,7 @@ from skill_agent._errors import SkillFailure
 from skill_agent._skill import Skill, SkillContext
 from skill_agent.primitives._base import navigate_to
 from skill_agent.primitives._supervise import halt
-from skill_agent.primitives.poses import quat_from_yaw, to_wm_pose, yaw_of
+from skill_agent.primitives.poses import to_wm_pose, yaw_of
 from skill_agent.protocol._skills import HasPropertyCond, ParamSpec, SkillDescription
 from skill_agent.skills._params import BASE, ROBOT, at, offline
 from skill_agent.skills._support import (
@@ -33,7 +33,7 @@ from skill_agent.skills._support import (
 from wm_store import WmClient
 from wm_store.ontology import Prop
 from wm_store.protocol import Observe, Op, UpdateElement
-from wm_store.reasoners import Transform
+from wm_store.reasoners import Transform, quat_from_yaw
 
 __all__ = ["POSITION_TOLERANCE", "YAW_TOLERANCE", "Navigate", "follow_ops"]
 

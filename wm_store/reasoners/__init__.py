@@ -19,6 +19,8 @@ from ._similarity import identify as identify
 from ._similarity import property_similarity as property_similarity
 from ._spatial import SpatialReasoner as SpatialReasoner
 from ._spatial import Transform as Transform
+from ._spatial import quat_from_axes as quat_from_axes
+from ._spatial import quat_from_yaw as quat_from_yaw
 from ._spatial import quat_multiply as quat_multiply
 from ._spatial import quat_rotate as quat_rotate
 
@@ -36,6 +38,8 @@ __all__ = [
     "classify",
     "identify",
     "property_similarity",
+    "quat_from_axes",
+    "quat_from_yaw",
     "quat_multiply",
     "quat_rotate",
 ]

@@ -40,15 +40,7 @@ from skill_agent.primitives import (
     sub_progress,
     surface_spots,
 )
-from skill_agent.primitives.poses import (
-    axis,
-    quat_from_axes,
-    quat_from_yaw,
-    to_transform,
-    to_wm_pose,
-    to_world_pose,
-    yaw_of,
-)
+from skill_agent.primitives.poses import axis, to_transform, to_wm_pose, to_world_pose, yaw_of
 from tests.unit.skill_agent.test_skills_fakes import (
     FakeArm,
     FakeBase,
@@ -56,7 +48,7 @@ from tests.unit.skill_agent.test_skills_fakes import (
     ToyWorld,
 )
 from wm_store.protocol import Orientation, Pose, Position, SizeCuboid, SizeCylinder, SizeSphere
-from wm_store.reasoners import Transform
+from wm_store.reasoners import Transform, quat_from_axes, quat_from_yaw
 
 DOWN = WorldPose(0.5, 0.0, 0.9, 1.0, 0.0, 0.0, 0.0)  # tcp z pointing at the floor
 
