@@ -5,9 +5,9 @@ loop's ``call_soon_threadsafe``; there is no trio path.
 
 Zenoh-python has no async API. Its calls are short synchronous Rust calls that release the GIL
 and are made directly on the loop, except those that may wait for the network: opening and
-closing a session and sending a query go through ``anyio.to_thread`` (a query waits, like a
-publication, while the session's send queue is full: a congested link or a stalled
-subscriber), and publications go through the mesh's sender thread (``meshlink._sender``).
+closing a session go through ``anyio.to_thread``; publications and queries go through the
+mesh's sender thread (``meshlink._sender``, :attr:`LoopPort.send_off`), since both wait while
+the session's send queue is full (a congested link, a stalled subscriber).
 What Zenoh *delivers* (replies, queries, samples, drop notifications) arrives on other threads
 through ``zenoh.handlers.Callback``; each callback here only appends to a list or deque and, at
 most, schedules one wake-up of the loop:
@@ -92,13 +92,17 @@ class LoopPort:
         RuntimeError: the running loop is not asyncio (the only supported backend).
     """
 
-    __slots__ = ("_call",)
+    __slots__ = ("_call", "send_off")
 
-    def __init__(self) -> None:
+    def __init__(self, send_off: Callable[[Callable[[], object]], None] | None = None) -> None:
         native = anyio.lowlevel.current_token().native_token
         if not isinstance(native, asyncio.AbstractEventLoop):
             raise RuntimeError("meshlink runs on anyio's asyncio backend only")
         self._call: Callable[[Callable[[], object]], object] = native.call_soon_threadsafe
+        self.send_off: Callable[[Callable[[], object]], None] = send_off or _call_here
+        """How a Zenoh call that may wait for the network leaves the loop: the mesh's sender
+        (:meth:`meshlink._sender.Sender.submit`), which makes it in order with the
+        publications; without one, the call is made at once."""
 
     def call_soon(self, fn: Callable[[], object]) -> bool:
         """Schedule ``fn()`` in the loop; never blocks. False if the loop has finished."""
@@ -107,6 +111,10 @@ class LoopPort:
         except RuntimeError:  # the loop is closed
             return False
         return True
+
+
+def _call_here(op: Callable[[], object]) -> None:
+    op()
 
 
 class Counter:
@@ -298,12 +306,11 @@ async def run_query(
         in_flight.add(-1)
         port.call_soon(finished.set)
 
-    token = zenoh.CancellationToken()
-    in_flight.add(1)
-    try:
-        # From a worker thread: with the send queue full, get() waits for room (BLOCK).
-        await anyio.to_thread.run_sync(
-            lambda: session.get(
+    refused: list[zenoh.ZError] = []
+
+    def send() -> None:  # the mesh's sender thread: with the send queue full, get() waits
+        try:
+            session.get(
                 selector,
                 zenoh.handlers.Callback(on_reply, on_drop, indirect=False),
                 payload=payload,
@@ -312,9 +319,18 @@ async def run_query(
                 consolidation=zenoh.ConsolidationMode.NONE,  # stream replies, keep duplicates
                 cancellation_token=token,
             )
-        )
+        except zenoh.ZError as e:
+            refused.append(e)
+            on_drop()
+
+    token = zenoh.CancellationToken()
+    in_flight.add(1)
+    try:
+        port.send_off(send)
         with anyio.move_on_after(timeout + _TIMEOUT_GRACE):
             await finished.wait()
+        if refused:
+            raise refused[0]
     finally:
         if not done:
             call0(token.cancel)  # blocks only while a reply callback is running

@@ -1,11 +1,13 @@
-"""The mesh's sender: publications leave the event loop and go out, in order, from one worker
-thread per mesh.
+"""The mesh's sender: publications and queries leave the event loop and go out, in order, from
+one worker thread per mesh.
 
-A Zenoh ``put`` with BLOCK congestion control waits while the session's send queue is full (a
-slow or stalled subscriber, a congested link), up to Zenoh's own block timeout. Made on the
-loop, that wait would stop every task of the process. So :class:`MeshPublisher
-<meshlink.MeshPublisher>` and :meth:`Mesh.put <meshlink.Mesh.put>` only append to this sender's
-queue, which never blocks, and the sender's thread makes the Zenoh calls.
+A Zenoh ``put`` with BLOCK congestion control, and a ``get``, wait while the session's send
+queue is full (a slow or stalled subscriber, a congested link), up to Zenoh's own block
+timeout. Made on the loop, that wait would stop every task of the process. So
+:class:`MeshPublisher <meshlink.MeshPublisher>`, :meth:`Mesh.put <meshlink.Mesh.put>` and every
+query (:attr:`meshlink._bridge.LoopPort.send_off`) only append to this sender's queue, which
+never blocks, and the sender's thread makes the Zenoh calls; a query's replies come back
+through its callbacks as before.
 
 Policy:
 
@@ -71,7 +73,7 @@ class Sender:
 
     @property
     def pending(self) -> int:
-        """Publications queued and not sent yet (the one being sent included)."""
+        """Publications and queries queued and not sent yet (the one being sent included)."""
         return len(self._items)
 
     def submit(self, op: Op) -> None:

@@ -318,9 +318,9 @@ async def open_mesh(config: MeshConfig) -> AsyncIterator[Mesh]:
         SessionError: Zenoh cannot open (client mode with no reachable router, port in use).
     """
     zconf = to_zenoh_config(config)
-    port = bridge.LoopPort()
-    session = await bridge.open_session(zconf)
     sender = Sender()
+    port = bridge.LoopPort(send_off=sender.submit)
+    session = await bridge.open_session(zconf)
     try:
         await anyio.lowlevel.checkpoint()  # a cancellation during the open lands here
         yield Mesh(session, config, port, sender)
