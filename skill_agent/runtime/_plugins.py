@@ -59,6 +59,9 @@ from wm_store.ontology import Ontology, did_you_mean
 
 __all__ = ["ENTRY_POINT_GROUP", "SkillRegistry", "entry_point_skills"]
 
+_STANDARD = "skill_agent.skills"
+"""The standard library's one public path (its modules are private)."""
+
 ENTRY_POINT_GROUP = "skimesh.skills"
 
 
@@ -248,8 +251,13 @@ class _Loader:
         except SkillLoadError:
             raise
         except Exception as e:
+            hint = ""
+            if isinstance(e, ModuleNotFoundError) and target.startswith(f"{_STANDARD}."):
+                hint = (
+                    f"; the standard skills are named {_STANDARD}:<Class> (e.g. {_STANDARD}:Pick)"
+                )
             raise SkillLoadError(
-                f"cannot import {target!r} ({origin}): {type(e).__name__}: {e}"
+                f"cannot import {target!r} ({origin}): {type(e).__name__}: {e}{hint}"
             ) from e
         self._done[target] = module
         return module

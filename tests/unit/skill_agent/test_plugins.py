@@ -97,6 +97,11 @@ def test_dotted_class_and_errors(ontology: Ontology, make_module: Callable[[str]
         SkillRegistry(ontology, paths=[f"{mod}:Abstractish"]).load()
     with pytest.raises(SkillLoadError, match=r"cannot import 'no_such_mod_x' \(config\)"):
         SkillRegistry(ontology, paths=["no_such_mod_x"]).load()
+    with pytest.raises(
+        SkillLoadError, match=r"standard skills are named skill_agent.skills:<Class>"
+    ):
+        SkillRegistry(ontology, paths=["skill_agent.skills.pick:Pick"]).load()
+    assert list(SkillRegistry(ontology, paths=["skill_agent.skills:Pick"]).load()) == ["pick"]
     empty = make_module("X = 1\n")
     with pytest.raises(SkillLoadError, match="defines no Skill subclass"):
         SkillRegistry(ontology, paths=[empty]).load()
