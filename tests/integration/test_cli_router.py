@@ -69,11 +69,21 @@ def test_routers_linked_with_connect_carry_samples_between_their_clients(mesh_na
                 ):
                     with anyio.fail_after(30):
                         # Declared after the subscriber on the same session: once B's client
-                        # sees the token, the routers are linked and know the subscriber.
+                        # sees the token, the routers are linked. The subscriber's route may
+                        # settle a moment later (under load), so the put is repeated, at most
+                        # 10 times a second, until the first sample arrives.
                         with on_a.declare_token(keys.agent("probe")):
                             assert await tokens.receive() == Liveness(keys.agent("probe"), True)
-                            on_b.put(keys.device_state("r1", "arm"), b"across the link")
-                            sample = await samples.receive()
+
+                            async def publish() -> None:
+                                while True:
+                                    on_b.put(keys.device_state("r1", "arm"), b"across the link")
+                                    await anyio.sleep(0.1)
+
+                            async with anyio.create_task_group() as tg:
+                                tg.start_soon(publish)
+                                sample = await samples.receive()
+                                tg.cancel_scope.cancel()
                     assert sample.key == keys.device_state("r1", "arm")
                     return sample.payload
 
