@@ -1,8 +1,8 @@
 """How a :class:`~mujoco_sim.SimWorld` paces its batches: in real time or as fast as it can.
 
 The runner asks its pacing, before each batch, how many control ticks to run and whether the
-batch takes the queued jobs (:meth:`next_batch`). See the module doc of ``mujoco_sim._world``
-for what each mode does with the event loop.
+batch takes the queued jobs (:meth:`next_batch`). See the module docs of ``mujoco_sim._world``
+and, for fast mode, ``mujoco_sim._fast_run`` for what each mode does with the event loop.
 """
 
 from __future__ import annotations

@@ -31,30 +31,11 @@ The pacing strategies are :class:`~mujoco_sim._pacing.RealTimePacing` and
 :class:`~mujoco_sim._pacing.FastPacing`; the state the runner keeps is split by owning thread
 (:class:`~mujoco_sim._runner_state.LoopState`, :class:`~mujoco_sim._runner_state.ThreadState`).
 
-``fast`` runs batches back to back in one thread call (a *run*) that returns only when a job
-that reports progress advanced, when :meth:`SimWorld.call` waits, when the world is stopped,
-and after ``fast_handover`` wall seconds at most. Meanwhile the simulation thread hands the
-loop two kinds of news:
-
-- **events**: a job finished, or a :meth:`SimWorld.wait_time` alarm came due. Each is posted
-  to the loop at once (through :class:`~mujoco_sim.LoopPost`, with a snapshot of that tick), and
-  before the next batch starts the simulation waits until the loop has taken them and let the
-  tasks they woke take a step. So whatever the loop does *in reaction to the simulation* starts
-  at the next batch boundary, exactly as if the run had returned there: the same ticks,
-  however busy the loop (a test checks it bit for bit against one thread call per batch).
-- **batch ends** at which nothing happened: the new snapshot is published by reference (one
-  attribute store, atomic under the GIL; :attr:`SimWorld.snapshot` reads the newer of it and
-  the last one delivered with an event), and the next batch starts at once: no post, no
-  wake-up of the loop, no waiting. Readers on the loop see the newest snapshot there is.
-
-What this saves is the loop's wake-up per batch and the simulation's wait for it (the figures
-are in docs/benchmarks.md, section Simulation), while the loop still reacts to the simulation
-in lock-step. The loop does not step with the simulation between events: a task that polls
-the snapshot (rather than awaiting an event or an alarm) sees the simulation go on in steps of
-whatever it ran meanwhile, as it would in real time.
-
-Backend: asyncio only (anyio's asyncio backend, as meshlink), since a fast run posts to the
-running asyncio loop from the simulation thread.
+``fast`` runs batches back to back in one thread call (a *run*) that hands finished jobs and
+due alarms to the loop as they happen, so that the loop still reacts to the simulation in
+lock-step: :class:`~mujoco_sim._fast_run.FastRun` (its module doc tells how), which the world
+owns. Backend: asyncio only (anyio's asyncio backend, as meshlink), since a fast run posts to
+the running asyncio loop from the simulation thread.
 
 Failure: a diverged state (or any error inside a batch) stops the world; every waiting and
 later command fails with that error.
@@ -62,19 +43,15 @@ later command fails with that error.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
-import threading
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
-from functools import partial
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import anyio
 import anyio.abc
-import anyio.from_thread
 import anyio.to_thread
 from msgspec import Meta, Struct
 
@@ -86,7 +63,7 @@ from device_drivers import (
     WorldPose,
 )
 from device_drivers.protocol import Command, Stop
-from mujoco_sim._loop_post import LoopPost, loop_post
+from mujoco_sim._fast_run import FastRun
 from mujoco_sim._pacing import FastPacing, Pacing, RealTimePacing
 from mujoco_sim._plant import Batch, DeviceKind, Plant
 from mujoco_sim._robot_ik import WorldIK
@@ -105,7 +82,6 @@ __all__ = ["SimWorld", "WorldOptions", "WorldStatistics", "running_world"]
 T = TypeVar("T")
 _log = logging.getLogger(__name__)
 _HALT_WAIT = 2.0  # wall seconds a cancelled motion waits for its halt
-_ACK_WAIT = 5.0  # wall seconds the simulation thread waits for the loop to take finished jobs
 
 
 class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
@@ -166,8 +142,9 @@ class SimWorld:
         self._limiter = anyio.CapacityLimiter(1)
         self._on_loop = LoopState(self.plant.snapshot)
         self._in_thread = ThreadState(self.plant.snapshot)
-        self._loop: asyncio.AbstractEventLoop | None = None  # the running loop, in a fast run
-        self._post: LoopPost | None = None  # how _report hands over (see loop_post)
+        self._fast = FastRun(
+            self.plant, self._on_loop, self._in_thread, release=self._forget, ring=self._ring
+        )
         self._ik = WorldIK(scenario)
         if recorder is not None:  # still in the constructing thread: nothing steps yet
             cameras = [
@@ -210,7 +187,7 @@ class SimWorld:
                 wall0=wall0,
             )
         )
-        run = self._batch_runner()
+        run = self._fast.batch_runner(fast=o.fast, fast_handover=o.fast_handover)
         task_status.started()
         try:
             while self._on_loop.failure is None:
@@ -218,120 +195,25 @@ class SimWorld:
                 inbox = self._on_loop.inbox
                 jobs = [inbox.popleft() for _ in range(len(inbox))] if take_jobs else []
                 started = time.perf_counter()
-                self._in_thread.acks.clear()  # the reactions to those came in at the checkpoint
-                self._in_thread.woken.clear()  # _complete rang them
-                self._in_thread.batch_ticks = self._in_thread.ticks_left = ticks
+                self._fast.begin(ticks)
                 try:
                     batch = await anyio.to_thread.run_sync(run, ticks, jobs, limiter=self._limiter)
                 except Exception as exc:  # divergence, or a bug in a controller
-                    self._take_posts()
+                    self._fast.take_posts()
                     _log.error("simulation stopped: %s", exc)
                     self._fail(exc, jobs)
                     return
-                self._take_posts()
+                self._fast.take_posts()
                 self._on_loop.busy += time.perf_counter() - started
                 self._complete(batch)
         finally:
-            self._take_posts()
-            if self._post is not None:
-                self._post.close()
-                self._post = None
+            self._fast.close()
             if self._on_loop.failure is None:
                 self._fail(DeviceUnavailableError("the simulation was stopped"), [])
-
-    def _batch_runner(self) -> Callable[[int, list[Job]], Batch]:
-        """What one thread call runs: one batch, or in fast mode with a ``fast_handover`` a
-        fast run of batches back to back, which posts finished jobs and due alarms to the loop
-        as they happen (see module doc)."""
-        o, plant = self.options, self.plant
-        if not (o.fast and o.fast_handover > 0):
-            return plant.run_batch
-        self._loop = asyncio.get_running_loop()
-        self._post = loop_post(self._loop)
-        return partial(
-            plant.run_batch,
-            inbox=self._on_loop.inbox,
-            until=self._between_batches,
-            budget=o.fast_handover,
-            report=self._report,
-            wake=self._wake,
-        )
 
     def _tell(self) -> None:
         """Loop: something a quiet world in real time must not sleep through happened."""
         self._on_loop.news.set()
-
-    def _between_batches(self, sim_time: float) -> bool:
-        """Simulation thread, between the batches of a fast run: wait until the loop has
-        dealt with what was reported during the last batch, then say whether the run must
-        return: a job reports progress, a :meth:`call` waits, or the world is being stopped
-        (a due alarm does not end it: it is reported, see :meth:`_wake`)."""
-        for ack in self._in_thread.acks:
-            if not ack.wait(_ACK_WAIT):
-                _log.warning("the event loop took over %g s to take a batch", _ACK_WAIT)
-        self._in_thread.acks.clear()
-        try:
-            anyio.from_thread.check_cancelled()  # the world is being stopped: return now
-        except BaseException as exc:  # the backend's cancellation exception
-            if isinstance(exc, Exception):
-                raise
-            return True
-        if self._on_loop.reporting > 0 or self._on_loop.calls > 0:
-            return True
-        # another batch of as many ticks follows
-        self._in_thread.ticks_left = self._in_thread.batch_ticks
-        return False
-
-    def _wake(self, sim_time: float) -> bool:
-        """Simulation thread, after each tick of a fast run: whether an alarm not yet reported
-        is due (then the plant reports, and :meth:`_deliver` rings it). Not after the last
-        tick of a batch: the batch's own report, with its snapshot of that very tick, comes
-        next and rings it (a second state check, snapshot and post for the same tick would be
-        wasted; sleeps that start at a batch boundary end at one)."""
-        self._in_thread.ticks_left -= 1
-        if sim_time < self._on_loop.next_alarm or self._in_thread.ticks_left <= 0:
-            return False
-        due = [
-            a[1]
-            for a in list(self._on_loop.alarms)
-            if a[0] <= sim_time and a[1] not in self._in_thread.woken
-        ]
-        self._in_thread.woken.update(due)
-        return bool(due)
-
-    def _report(self, finished: list[Job], snapshot: Snapshot) -> None:
-        """Simulation thread: hand ``finished`` jobs or a due alarm to the loop now, with
-        ``snapshot``; the next batch starts once the loop has taken it and let the tasks it woke
-        take a step. The end of a batch at which neither happened is only published (see
-        module doc)."""
-        if not finished and snapshot.time < self._on_loop.next_alarm:
-            self._in_thread.latest = snapshot
-            return
-        assert self._loop is not None
-        ack = threading.Event()
-        self._in_thread.acks.append(ack)
-        if self._post is not None:
-            self._post.post(self._deliver, finished, snapshot, ack)
-        else:
-            self._loop.call_soon_threadsafe(self._deliver, finished, snapshot, ack)
-
-    def _take_posts(self) -> None:
-        """Loop, once a thread call has returned: deliver what it posted and the loop has not
-        taken yet, before what follows (as ``call_soon_threadsafe`` posts would be)."""
-        if self._post is not None:
-            self._post.run_pending()
-
-    def _deliver(self, finished: list[Job], snapshot: Snapshot, ack: threading.Event) -> None:
-        """Loop: wake the waiters of ``finished``; ``ack`` once they have taken a step (the
-        callbacks ``call_soon`` queued before it have run, as after a checkpoint)."""
-        if snapshot.time >= self._on_loop.snapshot.time:  # (posts are taken in order: always)
-            self._on_loop.snapshot = snapshot
-        for job in finished:
-            self._forget(job)
-            job.done.set()
-        self._ring(snapshot.time)
-        assert self._loop is not None
-        self._loop.call_soon(ack.set)
 
     def _ring(self, sim_time: float) -> None:
         """Wake the :meth:`wait_time` alarms due at ``sim_time``."""
@@ -448,7 +330,8 @@ class SimWorld:
     @property
     def snapshot(self) -> Snapshot:
         """The newest state of the world: the last batch end's, or the last one delivered with
-        an event if that is newer (see module doc). Immutable: read it once per decision."""
+        an event if that is newer (see :mod:`mujoco_sim._fast_run`). Immutable: read it once
+        per decision."""
         latest, delivered = self._in_thread.latest, self._on_loop.snapshot
         return latest if latest.time > delivered.time else delivered
 

@@ -7,18 +7,18 @@ agents registered first); :func:`scene_loaded` tells whether the scene is there 
 
 from __future__ import annotations
 
-from ._ops import DOOR_HALF_THICKNESS as DOOR_HALF_THICKNESS
-from ._ops import HOME_6 as HOME_6
-from ._ops import HOME_7 as HOME_7
-from ._ops import REACH_FRACTION as REACH_FRACTION
-from ._ops import SIDE_GRASP_BELOW_TOP as SIDE_GRASP_BELOW_TOP
-from ._ops import SIDE_GRASP_INSET as SIDE_GRASP_INSET
-from ._ops import SIDE_GRASP_MAX_WIDTH as SIDE_GRASP_MAX_WIDTH
-from ._ops import device_label as device_label
-from ._ops import door_label as door_label
-from ._ops import home_label as home_label
+from ._furnishings import DOOR_HALF_THICKNESS as DOOR_HALF_THICKNESS
+from ._furnishings import SIDE_GRASP_BELOW_TOP as SIDE_GRASP_BELOW_TOP
+from ._furnishings import SIDE_GRASP_INSET as SIDE_GRASP_INSET
+from ._furnishings import SIDE_GRASP_MAX_WIDTH as SIDE_GRASP_MAX_WIDTH
+from ._furnishings import door_label as door_label
+from ._furnishings import template_capacity as template_capacity
 from ._ops import scenario_ops as scenario_ops
-from ._ops import template_capacity as template_capacity
+from ._robots import HOME_6 as HOME_6
+from ._robots import HOME_7 as HOME_7
+from ._robots import REACH_FRACTION as REACH_FRACTION
+from ._robots import device_label as device_label
+from ._robots import home_label as home_label
 from ._scene import scene_loaded as scene_loaded
 from ._scene import scene_ops as scene_ops
 

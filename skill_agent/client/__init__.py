@@ -4,13 +4,14 @@
 progress), :func:`list_agents` and :func:`find_skills` discover agents and their skills over the
 mesh, and :class:`EventFeed` yields the entries of one agent's or every agent's event log.
 
-Modules: ``_calls`` (AgentClient, discovery), ``_event_feed`` (EventFeed).
+Modules: ``_calls`` (AgentClient), ``_progress`` (following a run's progress: RunFeed),
+``_discovery`` (list_agents, find_skills), ``_event_feed`` (EventFeed).
 """
 
 from ._calls import AgentClient as AgentClient
-from ._calls import find_skills as find_skills
-from ._calls import list_agents as list_agents
 from ._calls import new_run_id as new_run_id
+from ._discovery import find_skills as find_skills
+from ._discovery import list_agents as list_agents
 from ._event_feed import EventFeed as EventFeed
 
 __all__ = [

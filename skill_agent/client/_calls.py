@@ -1,4 +1,4 @@
-"""Calling a skill agent over the mesh: :class:`AgentClient` and :func:`list_agents`.
+"""Calling a skill agent over the mesh: :class:`AgentClient`.
 
 One call starts a skill and waits for its result (SkiROS2 #42: a plain call, no GUI)::
 
@@ -24,28 +24,19 @@ session or an undecodable reply raise :class:`AgentTransportError`.
 from __future__ import annotations
 
 import logging
-import math
 import uuid
-from collections.abc import AsyncGenerator, AsyncIterator, Callable, Iterator, Mapping
-from contextlib import AsyncExitStack, asynccontextmanager, contextmanager
+from collections.abc import AsyncIterator, Callable, Mapping
+from contextlib import AsyncExitStack, asynccontextmanager
 from types import TracebackType
 from typing import Self, TypeVar
 
 import anyio
-from anyio.streams.memory import MemoryObjectReceiveStream, MemoryObjectSendStream
 
-from meshlink import (
-    Liveness,
-    Mesh,
-    MeshlinkError,
-    NoReplyError,
-    RemoteError,
-    Sample,
-    Subscription,
-)
+from meshlink import Mesh, MeshlinkError, NoReplyError, RemoteError
 from meshlink.rpc import WireError
 from skill_agent._errors import AgentTransportError, SkillError, error_for_reply
-from skill_agent.protocol._codec import decode_event, decode_reply, encode
+from skill_agent.client._progress import RunFeed, follow_run
+from skill_agent.protocol._codec import decode_reply, encode
 from skill_agent.protocol._runs import (
     AgentReply,
     AgentRequest,
@@ -70,15 +61,7 @@ from skill_agent.protocol._runs import (
 from skill_agent.protocol._skills import SkillDescription
 from wm_store.protocol import Value
 
-__all__ = [
-    "AgentClient",
-    "EventCallback",
-    "RunFeed",
-    "find_skills",
-    "list_agents",
-    "liveliness_get",
-    "new_run_id",
-]
+__all__ = ["AgentClient", "EventCallback", "new_run_id"]
 
 _log = logging.getLogger(__name__)
 R = TypeVar("R")
@@ -88,70 +71,6 @@ EventCallback = Callable[[RunEvent], object]
 def new_run_id() -> str:
     """A fresh run id (a valid key segment)."""
     return uuid.uuid4().hex
-
-
-class RunFeed:
-    """Routes one agent's progress events to per-run inboxes, and tells every inbox when the
-    agent's liveliness token disappears or comes back (as :class:`~meshlink.Liveness`)."""
-
-    def __init__(self) -> None:
-        self._inboxes: dict[str, MemoryObjectSendStream[RunEvent | Liveness]] = {}
-
-    @classmethod
-    @asynccontextmanager
-    async def open(cls, mesh: Mesh, agent: str, key: str) -> AsyncIterator[RunFeed]:
-        """Subscribe to ``key`` (one run's or every run's progress) and watch ``agent``."""
-        feed = cls()
-        try:
-            async with (
-                mesh.subscribe(key) as samples,
-                mesh.watch_liveliness(mesh.keys.agent(agent)) as presence,
-                anyio.create_task_group() as tg,
-            ):
-                tg.start_soon(feed._pump_events, samples)
-                tg.start_soon(feed._pump_presence, presence)
-                try:
-                    yield feed
-                finally:
-                    tg.cancel_scope.cancel()
-        except BaseExceptionGroup as group:  # the caller's error, not a group of ours
-            if len(group.exceptions) == 1 and isinstance(group.exceptions[0], Exception):
-                raise group.exceptions[0] from None
-            raise
-
-    @contextmanager
-    def register(self, run_id: str) -> Iterator[MemoryObjectReceiveStream[RunEvent | Liveness]]:
-        send, receive = anyio.create_memory_object_stream[RunEvent | Liveness](math.inf)
-        self._inboxes[run_id] = send
-        try:
-            with receive:
-                yield receive
-        finally:
-            del self._inboxes[run_id]
-            send.close()
-
-    async def _pump_events(self, samples: Subscription[Sample]) -> None:
-        async for sample in samples:
-            # ``.../runs/<run>/progress``: other clients' runs are skipped undecoded.
-            inbox = self._inboxes.get(sample.key.rsplit("/", 2)[-2])
-            if inbox is None:
-                continue
-            try:
-                event = decode_event(sample.payload)
-            except WireError as e:
-                _log.warning("undecodable progress event on %s: %s", sample.key, e)
-                continue
-            inbox.send_nowait(event)
-
-    async def _pump_presence(self, presence: Subscription[Liveness]) -> None:
-        async for change in presence:
-            for inbox in list(self._inboxes.values()):
-                inbox.send_nowait(change)
-
-
-async def liveliness_get(mesh: Mesh, key_expr: str, *, timeout: float) -> list[str]:
-    """Keys of the liveliness tokens alive now that match ``key_expr``."""
-    return await mesh.alive(key_expr, timeout=timeout)
 
 
 class AgentClient:
@@ -341,7 +260,6 @@ class AgentClient:
         return (await self._expect(Reload(), OkReply, timeout)).message
 
     # ------------------------------------------------------------------ runs
-
     @asynccontextmanager
     async def watch(self, run_id: str) -> AsyncIterator[AsyncIterator[RunEvent]]:
         """Subscribe to a run's events; enter *before* starting it. Yields an async iterator of
@@ -353,51 +271,11 @@ class AgentClient:
                 key = self.mesh.keys.run_progress(self.agent, run_id)
                 feed = await stack.enter_async_context(RunFeed.open(self.mesh, self.agent, key))
             with feed.register(run_id) as inbox:
-                events = self._events(run_id, inbox)
+                events = follow_run(self, run_id, inbox)
                 try:
                     yield events
                 finally:
                     await events.aclose()
-
-    async def _events(
-        self, run_id: str, inbox: MemoryObjectReceiveStream[RunEvent | Liveness]
-    ) -> AsyncGenerator[RunEvent, None]:
-        lost_since: float | None = None
-        while True:
-            wait = self.status_every if lost_since is None else self.lost_grace
-            item: RunEvent | Liveness | None = None
-            try:
-                item = inbox.receive_nowait()  # a burst of events needs no timer each
-            except anyio.WouldBlock:
-                with anyio.move_on_after(wait):
-                    item = await inbox.receive()
-            if item is None:  # quiet for `wait` seconds
-                if lost_since is not None:
-                    raise AgentTransportError(
-                        f"agent {self.agent!r} disappeared (liveliness token gone for "
-                        f"{self.lost_grace:g} s) while run {run_id} was running"
-                    )
-                result = await self._result_if_done(run_id)
-            elif isinstance(item, Liveness):
-                if not item.alive:
-                    lost_since = anyio.current_time()
-                    continue
-                if lost_since is None:
-                    continue  # the first "alive" of the watch's history
-                lost_since = None  # back (router restart): a result may have been missed
-                result = await self._result_if_done(run_id)
-            else:
-                yield item
-                if isinstance(item, RunResult):
-                    return
-                continue
-            if result is not None:
-                yield result
-                return
-
-    async def _result_if_done(self, run_id: str) -> RunResult | None:
-        info = await self.status(run_id)
-        return info.result
 
     async def run(
         self,
@@ -455,31 +333,3 @@ class AgentClient:
                 await self.stop(run_id, timeout=min(self.timeout, 2.0))
             except SkillError as e:
                 _log.debug("could not stop run %s on %s: %s", run_id, self.agent, e)
-
-
-async def list_agents(mesh: Mesh, *, timeout: float = 2.0) -> list[str]:
-    """Names of the agents whose liveliness token is alive now, sorted."""
-    keys = await liveliness_get(mesh, mesh.keys.agents(), timeout=timeout)
-    names: set[str] = set()
-    for key in keys:
-        try:
-            names.add(mesh.keys.name_of_agent_key(key))
-        except ValueError:
-            _log.debug("ignored liveliness key %s", key)
-    return sorted(names)
-
-
-async def find_skills(mesh: Mesh, *, timeout: float = 2.0) -> dict[str, SkillsReply]:
-    """Every reachable agent's skills at once (one query on ``agents/*/skills``), by agent."""
-    found: dict[str, SkillsReply] = {}
-    for reply in await mesh.get(mesh.keys.agents_skills(), encode(ListSkills()), timeout=timeout):
-        if not reply.ok:
-            continue
-        try:
-            decoded = decode_reply(reply.payload)
-        except WireError:
-            _log.warning("undecodable skills reply from %s", reply.key)
-            continue
-        if isinstance(decoded, SkillsReply):
-            found[decoded.agent] = decoded
-    return dict(sorted(found.items()))

@@ -8,9 +8,9 @@ instead of moving hardware (:class:`SimulatedOutcomes`). An agent is configured 
 (:class:`SkillRegistry`) and binds its device drivers to world-model elements
 (:func:`bind_devices`, :func:`bind_hardware`). Serving it over Zenoh is :mod:`skill_agent.server`.
 
-Modules: ``_agent`` (AgentCore), ``_run`` (one run's lifecycle), ``_run_wm`` (its recorded
-world-model view), ``_locks``, ``_event_log``, ``_simulated``, ``_config``, ``_plugins``,
-``_wiring``.
+Modules: ``_agent`` (AgentCore), ``_run`` (one run's lifecycle), ``_control`` (a run's state,
+commands and events; RunEnv), ``_context`` (RunContext), ``_run_wm`` (its recorded world-model
+view), ``_locks``, ``_event_log``, ``_simulated``, ``_config``, ``_plugins``, ``_wiring``.
 """
 
 from ._agent import AgentCore as AgentCore
@@ -24,6 +24,7 @@ from ._config import SimulationConfig as SimulationConfig
 from ._config import SkillsConfig as SkillsConfig
 from ._config import load_config as load_config
 from ._config import parse_config as parse_config
+from ._context import RunContext as RunContext
 from ._event_log import EventLog as EventLog
 from ._event_log import entry_agent as entry_agent
 from ._event_log import entry_run as entry_run
@@ -32,7 +33,6 @@ from ._locks import ResourceLocks as ResourceLocks
 from ._plugins import ENTRY_POINT_GROUP as ENTRY_POINT_GROUP
 from ._plugins import SkillRegistry as SkillRegistry
 from ._plugins import entry_point_skills as entry_point_skills
-from ._run import RunContext as RunContext
 from ._run_wm import RunWm as RunWm
 from ._simulated import SimulatedOutcomes as SimulatedOutcomes
 from ._simulated import skill_probability as skill_probability

@@ -49,9 +49,10 @@ from skill_agent.protocol._log import (
 )
 from skill_agent.protocol._runs import RunEvent, RunInfo, RunResult, RunStarted, StartRun
 from skill_agent.protocol._skills import SkillDescription
+from skill_agent.runtime._control import RunEnv
 from skill_agent.runtime._event_log import EventLog
 from skill_agent.runtime._locks import ResourceLocks
-from skill_agent.runtime._run import Run, RunEnv
+from skill_agent.runtime._run import Run
 from skill_agent.runtime._simulated import SimulatedOutcomes
 from wm_store import WmClient
 from wm_store.protocol import Value

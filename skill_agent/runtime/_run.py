@@ -1,5 +1,6 @@
-"""One run of a skill: :class:`Run` drives the lifecycle, :class:`RunContext` is what the skill
-sees.
+"""One run of a skill: :class:`Run` drives the lifecycle (its state, commands and events are
+:class:`~skill_agent.runtime._control.RunControl`'s; :class:`RunContext` is what the skill
+sees).
 
 Lifecycle (each step emits a :class:`~skill_agent.protocol.Progress` with the next ``seq``; the
 run ends with exactly one :class:`~skill_agent.protocol.RunResult`)::
@@ -41,138 +42,32 @@ import logging
 import time
 from collections.abc import Awaitable, Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
-from typing import TypeVar
 
 import anyio
-import anyio.lowlevel
 
-from skill_agent._errors import (
-    ParameterError,
-    ParameterTypeError,
-    PreconditionError,
-    RunStateError,
-    SkillFailure,
-    leaves,
-)
+from skill_agent._errors import PreconditionError, SkillFailure, leaves
 from skill_agent._skill import Skill
 from skill_agent.conditions._effects import effects
 from skill_agent.conditions._eval import evaluate, evaluate_all
-from skill_agent.conditions._model import ConditionRegistry
-from skill_agent.parameters._states import param_states
 from skill_agent.protocol._log import WmWriteEntry
-from skill_agent.protocol._runs import (
-    Progress,
-    ResultReason,
-    RunEvent,
-    RunInfo,
-    RunResult,
-    RunState,
-)
+from skill_agent.protocol._runs import ResultReason, RunResult, RunState
 from skill_agent.protocol._skills import SkillDescription
-from skill_agent.runtime._run_wm import RunWm
+from skill_agent.runtime._context import RunContext
+from skill_agent.runtime._control import RunControl, RunEnv
 from skill_agent.runtime._simulated import SimulatedOutcomes
-from wm_store import WmClient
-from wm_store.protocol import Change, Element, Op, Value
+from wm_store.protocol import Change, Op, Value
 
-__all__ = ["ChildRunner", "Run", "RunContext", "RunEnv"]
+__all__ = ["Run"]
 
-T = TypeVar("T")
 _log = logging.getLogger(__name__)
 
-ChildRunner = Callable[["Run", str, Mapping[str, Value]], Awaitable[RunResult]]
-"""``(parent, skill, params) -> result``: runs a sub-run inside the parent's task."""
-
-_FINAL: dict[ResultReason, RunState] = {"ok": "succeeded", "preempted": "preempted"}
 _PREEMPTING: frozenset[ResultReason] = frozenset({"preempted", "timeout", "hold_violated", "error"})
 
 
-@dataclass(frozen=True)
-class RunEnv:
-    """What runs need from their agent (one per agent; built by ``AgentCore``)."""
-
-    agent: str
-    wm: WmClient
-    emit: Callable[[RunEvent], None]
-    devices: Mapping[str, object] = field(default_factory=dict)
-    registry: ConditionRegistry | None = None
-    preempt_timeout: float = 5.0
-    on_write: Callable[[WmWriteEntry], None] | None = None
-    """Called with every world-model transaction a run committed (its effects, and every
-    write its skill made through ``ctx.wm`` or ``ctx.transact``); quick, on the loop."""
-    run_child: ChildRunner | None = None
-
-
-class RunContext:
-    """The :class:`~skill_agent.SkillContext` of one run."""
-
-    def __init__(self, run: Run) -> None:
-        self._run = run
-        self.run_id = run.run_id
-        self.agent = run.env.agent
-        self.description = run.description
-        self.params: Mapping[str, Value] = run.params
-        self.simulated = run.simulated
-        self.log = logging.getLogger(f"skill_agent.skills.{run.description.name}")
-        self._wm = RunWm(run.env.wm, run.wrote)
-
-    @property
-    def wm(self) -> RunWm:
-        """The agent's world-model client as this run's view: reads as the client, every
-        committed write also recorded in the event log (:class:`~skill_agent.runtime.RunWm`)."""
-        return self._wm
-
-    def element(self, param: str) -> Element:
-        """The element bound to ``param``; raises ParameterError if it is no element id."""
-        value = self.params.get(param)
-        if not isinstance(value, str):
-            raise ParameterError(f"parameter {param!r} of {self.description.name} is no element")
-        return self.wm.get_element(value)
-
-    def device(self, param: str, kind: type[T]) -> T:
-        """The driver bound to hardware parameter ``param``. Raises RunStateError when
-        simulated, ParameterError / ParameterTypeError when there is no such driver."""
-        if self.simulated:
-            raise RunStateError(f"run {self.run_id} is simulated: no hardware for {param!r}")
-        spec = next((p for p in self.description.parameters if p.name == param), None)
-        if spec is None or spec.kind != "hardware":
-            raise ParameterError(
-                f"{param!r} is not a hardware parameter of {self.description.name}"
-            )
-        device_id = self.params.get(param)
-        driver = self._run.env.devices.get(device_id) if isinstance(device_id, str) else None
-        if driver is None:
-            raise ParameterError(f"agent {self.agent} has no driver for device {device_id!r}")
-        if not isinstance(driver, kind):
-            raise ParameterTypeError(
-                f"device {device_id} is a {type(driver).__name__}, not a {kind.__name__}"
-            )
-        return driver
-
-    async def progress(self, message: str, *, fraction: float = -1.0, step: str = "") -> None:
-        """Publish a progress event (also a cancellation point)."""
-        await anyio.lowlevel.checkpoint()
-        self._run.progress(message, fraction=fraction, step=step)
-
-    async def checkpoint(self) -> None:
-        """Hold while this run (or a parent) is paused; a cancellation point otherwise."""
-        await self._run.checkpoint()
-
-    async def run_child(self, skill: str, params: Mapping[str, Value]) -> RunResult:
-        """Run ``skill`` as a sub-run (composite skills); returns its result. Raises the
-        start refusals (UnknownSkillError, ParameterError, ResourceBusyError)."""
-        if self._run.env.run_child is None:
-            raise RunStateError(f"agent {self.agent} cannot run sub-skills")
-        return await self._run.env.run_child(self._run, skill, params)
-
-    async def transact(self, ops: Sequence[Op]) -> int:
-        """Commit ``ops`` in one world-model transaction (recorded in the event log, as every
-        write through :attr:`wm`); returns its revision."""
-        return await self._run.commit(list(ops))
-
-
-class Run:
+class Run(RunControl):
     """Drives one run. Create, then ``await drive()`` in a task (see the module docstring)."""
+
+    parent: Run | None
 
     def __init__(
         self,
@@ -188,102 +83,20 @@ class Run:
         parent: Run | None = None,
         acquire: Callable[[], Awaitable[None]] | None = None,
     ) -> None:
-        self.env, self.run_id, self.skill, self.description = env, run_id, skill, description
-        self.params = dict(params)
-        self.resources = list(resources)
-        self.timeout = timeout if timeout is not None else description.timeout
-        self.outcomes, self.parent, self._acquire = outcomes, parent, acquire
-        self.simulated = outcomes is not None
-        self.started_at = time.time()
-        self.context = RunContext(self)
-        self._state: RunState = "pending"
-        self._step = ""
-        self._seq = 0
-        self._scope = anyio.CancelScope()
-        self._stop: tuple[ResultReason, str] | None = None
-        self._resumed: anyio.Event | None = None
-        self._touched = False  # a skill method was entered: on_preempt is due after a cut
-        self._trusted: list[str] = []
-        self._effects_revision = 0
-        self._accepted = anyio.Event()
-        self._done = anyio.Event()
-        self.refusal: PreconditionError | None = None
-        self.result: RunResult | None = None
-
-    # ------------------------------------------------------------------ status
-
-    @property
-    def state(self) -> RunState:
-        return "paused" if self._resumed is not None and self.result is None else self._state
-
-    @property
-    def done(self) -> bool:
-        return self.result is not None
-
-    def info(self) -> RunInfo:
-        return RunInfo(
-            run_id=self.run_id,
-            skill=self.description.name,
-            state=self.state,
-            params=dict(self.params),
-            resources=list(self.resources),
-            started_at=self.started_at,
-            result=self.result,
-            param_states=param_states(self.description, self.params),
+        super().__init__(
+            env,
+            run_id=run_id,
+            description=description,
+            params=params,
+            resources=resources,
+            parent=parent,
         )
-
-    async def wait(self) -> RunResult:
-        """Block until the run has ended; returns its result."""
-        await self._done.wait()
-        assert self.result is not None
-        return self.result
-
-    async def wait_accepted(self) -> None:
-        """Block until the pre-conditions passed, or the run ended (then see ``refusal``)."""
-        await self._accepted.wait()
-
-    # ------------------------------------------------------------------ commands (sync)
-
-    def stop(self, reason: ResultReason = "preempted", message: str = "stopped") -> None:
-        """Cancel the run (it ends at the skill's next await); idempotent, never blocks."""
-        if self.result is None:
-            self._stop = self._stop or (reason, message)
-            self._scope.cancel()
-
-    def abandon(self, message: str) -> None:
-        """End a run whose task is gone without driving it (result ``preempted``)."""
-        if self.result is None:
-            self._finish("preempted", message)
-
-    def pause(self) -> None:
-        """Hold at the next checkpoint. Raises RunStateError if ended or already paused."""
-        if self.result is not None or self._resumed is not None:
-            raise RunStateError(f"run {self.run_id} is {self.state}; it cannot be paused")
-        self._resumed = anyio.Event()
-        self._emit_progress("paused", "paused; holds at its next checkpoint")
-
-    def resume(self) -> None:
-        """Release a paused run. Raises RunStateError if it is not paused."""
-        if self.result is not None or self._resumed is None:
-            raise RunStateError(f"run {self.run_id} is {self.state}, not paused")
-        resumed, self._resumed = self._resumed, None
-        resumed.set()
-        self._emit_progress(self._state, "resumed")
-
-    async def checkpoint(self) -> None:
-        await anyio.lowlevel.checkpoint()
-        run: Run | None = self
-        while run is not None:
-            if run._resumed is not None:
-                await run._resumed.wait()
-                run = self  # re-check the whole chain after waking
-            else:
-                run = run.parent
-
-    def progress(self, message: str, *, fraction: float = -1.0, step: str = "") -> None:
-        self._emit_progress(self.state, message, fraction=fraction, step=step or self._step)
-
-    # ------------------------------------------------------------------ driving
+        self.skill = skill
+        self.timeout = timeout if timeout is not None else description.timeout
+        self.outcomes, self._acquire = outcomes, acquire
+        self.simulated = outcomes is not None
+        self.context = RunContext(self)
+        self._touched = False  # a skill method was entered: on_preempt is due after a cut
 
     async def drive(self) -> RunResult:
         """Run the lifecycle; returns the result. Raises nothing but the cancellation of an
@@ -464,45 +277,3 @@ class Run:
                     _log.error("run %s: on_preempt failed", self.run_id, exc_info=exc)
                     return f"; on_preempt failed: {type(exc).__name__}: {exc}"
         return f"; on_preempt did not finish within {limit} s" if scope.cancelled_caught else ""
-
-    def _emit_progress(
-        self, state: RunState, message: str, *, fraction: float = -1.0, step: str = ""
-    ) -> None:
-        event = Progress(
-            run_id=self.run_id,
-            agent=self.env.agent,
-            skill=self.description.name,
-            seq=self._next_seq(),
-            state=state,
-            step=step or self._step,
-            message=message,
-            fraction=fraction,
-            stamp=time.time(),
-        )
-        self.env.emit(event)
-
-    def _next_seq(self) -> int:
-        self._seq += 1
-        return self._seq
-
-    def _finish(self, reason: ResultReason, message: str) -> RunResult:
-        self._state = _FINAL.get(reason, "failed")
-        self._resumed = None
-        self.result = RunResult(
-            run_id=self.run_id,
-            agent=self.env.agent,
-            skill=self.description.name,
-            seq=self._next_seq(),
-            success=reason == "ok",
-            reason=reason,
-            message=message,
-            params=dict(self.params),
-            started_at=self.started_at,
-            finished_at=time.time(),
-            effects_revision=self._effects_revision,
-            trusted_wm=list(self._trusted),
-        )
-        self.env.emit(self.result)
-        self._accepted.set()
-        self._done.set()
-        return self.result

@@ -229,13 +229,13 @@ async def test_an_alarm_due_at_the_end_of_a_batch_rides_on_its_report() -> None:
     scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
     world = await SimWorld.create(scenario, FAST)
     posted: list[float] = []
-    report = world._report
+    report = world._fast.report
 
     def counting(finished: list[Any], snapshot: Any) -> None:
         posted.append(snapshot.time)
         report(finished, snapshot)
 
-    world._report = counting  # type: ignore[method-assign]
+    world._fast.report = counting  # type: ignore[method-assign]
     arm = sim_devices(world, "friend")[("friend", "arm")]
     assert isinstance(arm, SimArm)
     async with anyio.create_task_group() as tg:
@@ -256,13 +256,13 @@ async def test_quiet_batch_ends_are_published_without_waking_the_loop() -> None:
     scenario = load_scenario(SCENARIOS / "meal" / "scenario.toml")
     world = await SimWorld.create(scenario, FAST)
     delivered: list[float] = []
-    deliver = world._deliver
+    deliver = world._fast.deliver
 
     def counting(finished: list[Any], snapshot: Any, ack: Any) -> None:
         delivered.append(snapshot.time)
         deliver(finished, snapshot, ack)
 
-    world._deliver = counting  # type: ignore[method-assign]
+    world._fast.deliver = counting  # type: ignore[method-assign]
     async with anyio.create_task_group() as tg:
         await tg.start(world.run)
         await world.wait_time(2.0 - 1e-6)  # the only event, at the end of the 20th batch
