@@ -29,7 +29,6 @@ optional), and its codes (``CommandError``, ``DeviceError``) are class names as 
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Annotated, Any, Literal, TypeAlias, cast
 
 from msgspec import Meta, Struct, field
@@ -283,10 +282,10 @@ def _device_error(reply: rpc.ErrorReply) -> errors.DeviceError:
     return exc
 
 
-_CODES: dict[str, Callable[[rpc.ErrorReply], errors.DeviceError]] = {
-    BAD_REQUEST: lambda r: errors.CommandError(r.message),
-    TOO_LARGE: lambda r: errors.CommandError(r.message),
-    INTERNAL: lambda r: errors.DeviceError(r.message),
+_CODES: dict[str, rpc.ErrorFactory] = {
+    BAD_REQUEST: rpc.from_message(errors.CommandError),
+    TOO_LARGE: rpc.from_message(errors.CommandError),
+    INTERNAL: rpc.from_message(errors.DeviceError),
     UNAVAILABLE: lambda r: errors.DeviceUnavailableError(f"the device server failed: {r.message}"),
 }
 """The standard codes of :mod:`meshlink.rpc` as device-layer exceptions; any other code is an

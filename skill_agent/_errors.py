@@ -45,6 +45,8 @@ from meshlink.rpc import (
     ErrorFactory,
     decode_error,
     error_for,
+    errors_by_code,
+    from_message,
 )
 from skill_agent.protocol._runs import ErrorReply
 from skill_agent.protocol._skills import ParamState
@@ -156,17 +158,15 @@ class RemoteSkillError(SkillError):
         self.message = message
 
 
-_BY_CODE: dict[str, type[SkillError]] = {
-    cls.code: cls
-    for cls in (
+def _with_param_states(cls: type[ParameterError]) -> ErrorFactory:
+    return lambda r: cls(r.message, param_states=getattr(r, "param_states", None))
+
+
+AGENT_CODES: dict[str, ErrorFactory] = {
+    **errors_by_code(
         SkillError,
         SkillLoadError,
         UnknownSkillError,
-        ParameterError,
-        UnknownParameterError,
-        ParameterTypeError,
-        UnspecifiedParameterError,
-        InferenceError,
         ResourceBusyError,
         PreconditionError,
         UnknownRunError,
@@ -175,19 +175,18 @@ _BY_CODE: dict[str, type[SkillError]] = {
         BadRequestError,
         AgentInternalError,
         AgentTransportError,
-    )
-}
-
-
-def _rebuild(cls: type[SkillError]) -> ErrorFactory:
-    if issubclass(cls, ParameterError):
-        return lambda r: cls(r.message, param_states=getattr(r, "param_states", None))
-    return lambda r: cls(r.message)
-
-
-AGENT_CODES: dict[str, ErrorFactory] = {
-    **{code: _rebuild(cls) for code, cls in _BY_CODE.items()},
-    TOO_LARGE: _rebuild(BadRequestError),
+    ),
+    **{
+        cls.code: _with_param_states(cls)
+        for cls in (
+            ParameterError,
+            UnknownParameterError,
+            ParameterTypeError,
+            UnspecifiedParameterError,
+            InferenceError,
+        )
+    },
+    TOO_LARGE: from_message(BadRequestError),
     UNAVAILABLE: lambda r: RemoteSkillError("remote_error", r.message),
 }
 """Error code -> the local exception, for :func:`meshlink.rpc.error_for` (a ParameterError

@@ -35,7 +35,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from meshlink.rpc import UNAVAILABLE, ErrorFactory, ErrorReply
+from meshlink.rpc import UNAVAILABLE, ErrorFactory, ErrorReply, errors_by_code
 
 if TYPE_CHECKING:
     from .protocol import VerifyProblem
@@ -111,19 +111,16 @@ class VerificationError(TaskError):
     code = "verification"
 
 
-_BY_CODE: dict[str, type[TaskError]] = {
-    cls.code: cls
-    for cls in (
-        TaskError,
-        GoalParseError,
-        DiscoveryError,
-        PlanningError,
-        DomainError,
-        UnsolvableError,
-        PlannerTimeoutError,
-        VerificationError,
-    )
-}
+_BY_CODE = errors_by_code(
+    TaskError,
+    GoalParseError,
+    DiscoveryError,
+    PlanningError,
+    DomainError,
+    UnsolvableError,
+    PlannerTimeoutError,
+    VerificationError,
+)
 
 
 class FileRefusedError(VerificationError):
@@ -161,15 +158,8 @@ class TaskTransportError(TaskError):
     code = "transport"
 
 
-def _with_message(cls: type[TaskError]) -> ErrorFactory:
-    def factory(reply: ErrorReply) -> TaskError:
-        return cls(reply.message)
-
-    return factory
-
-
 TASK_CODES: dict[str, ErrorFactory] = {
-    **{code: _with_message(cls) for code, cls in _BY_CODE.items()},
+    **_BY_CODE,
     UNAVAILABLE: lambda reply: TaskTransportError(reply.message),
 }
 """Error reply code -> the exception a client raises (``unavailable``: the error payload was

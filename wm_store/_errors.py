@@ -35,10 +35,16 @@ with meshlink's standard codes ``bad_request`` and ``too_large``, which the clie
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
-from meshlink.rpc import BAD_REQUEST, TOO_LARGE, UNAVAILABLE
+from meshlink.rpc import (
+    BAD_REQUEST,
+    TOO_LARGE,
+    UNAVAILABLE,
+    ErrorFactory,
+    errors_by_code,
+    from_message,
+)
 
 __all__ = [
     "WM_CODES",
@@ -164,48 +170,38 @@ class RemoteError(WmError):
         self.message = message
 
 
-_BY_CODE: dict[str, type[WmError]] = {
-    cls.code: cls
-    for cls in (
-        WmError,
-        OntologyError,
-        UnknownClassError,
-        UnknownRelationError,
-        UnknownPropertyError,
-        UnknownTemplateError,
-        ValidationError,
-        RelationDomainError,
-        TreeShapeError,
-        PropertyValueError,
-        CardinalityError,
-        ElementNotFoundError,
-        DuplicateIdError,
-        ConflictError,
-        ProtocolError,
-        HistoryCompactedError,
-        StorageError,
-        CorruptLogError,
-        TransportError,
-    )
-}
-
-
-def _from_message(cls: type[WmError]) -> Callable[[Any], WmError]:
-    def factory(reply: Any) -> WmError:
-        return cls(reply.message)
-
-    return factory
+_BY_CODE = errors_by_code(
+    WmError,
+    OntologyError,
+    UnknownClassError,
+    UnknownRelationError,
+    UnknownPropertyError,
+    UnknownTemplateError,
+    ValidationError,
+    RelationDomainError,
+    TreeShapeError,
+    PropertyValueError,
+    CardinalityError,
+    ElementNotFoundError,
+    DuplicateIdError,
+    ConflictError,
+    ProtocolError,
+    HistoryCompactedError,
+    StorageError,
+    CorruptLogError,
+    TransportError,
+)
 
 
 def _too_large(reply: Any) -> WmError:
     return ProtocolError(f"{reply.message}; split the transaction")
 
 
-WM_CODES: dict[str, Callable[[Any], WmError]] = {
-    **{code: _from_message(cls) for code, cls in _BY_CODE.items()},
-    BAD_REQUEST: _from_message(ProtocolError),
+WM_CODES: dict[str, ErrorFactory] = {
+    **_BY_CODE,
+    BAD_REQUEST: from_message(ProtocolError),
     TOO_LARGE: _too_large,
-    UNAVAILABLE: _from_message(TransportError),
+    UNAVAILABLE: from_message(TransportError),
 }
 """Error code -> the local exception, for :func:`meshlink.rpc.raise_for_error`: each
 :class:`WmError` code gives its own class (so ``except ConflictError`` works across the wire),

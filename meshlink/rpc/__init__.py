@@ -10,10 +10,18 @@
   anything that goes wrong, logging unexpected exceptions; services give their own exceptions'
   codes as data (:func:`coded_errors`).
 - Client: :func:`error_for` / :func:`raise_for_error` rebuild the service's exception from a
-  code -> factory mapping, falling back to :class:`meshlink.RemoteError` (which keeps the code).
+  code -> factory mapping (:func:`errors_by_code`, :func:`from_message`), falling back to
+  :class:`meshlink.RemoteError` (which keeps the code).
 """
 
-from ._client import ErrorFactory, decode_error, error_for, raise_for_error
+from ._client import (
+    ErrorFactory,
+    decode_error,
+    error_for,
+    errors_by_code,
+    from_message,
+    raise_for_error,
+)
 from ._server import ErrorMapper, RequestHandler, coded_errors
 from ._wire import (
     BAD_REQUEST,
@@ -43,5 +51,7 @@ __all__ = [
     "decode_error",
     "encode",
     "error_for",
+    "errors_by_code",
+    "from_message",
     "raise_for_error",
 ]

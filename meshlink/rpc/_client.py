@@ -8,7 +8,14 @@ from typing import Any, NoReturn, TypeVar
 from .._errors import RemoteError
 from ._wire import UNAVAILABLE, Decoder, ErrorReply, WireError
 
-__all__ = ["ErrorFactory", "decode_error", "error_for", "raise_for_error"]
+__all__ = [
+    "ErrorFactory",
+    "decode_error",
+    "error_for",
+    "errors_by_code",
+    "from_message",
+    "raise_for_error",
+]
 
 E = TypeVar("E", bound=ErrorReply)
 
@@ -16,6 +23,21 @@ ErrorFactory = Callable[[Any], Exception]
 """Builds a service's exception from an :class:`ErrorReply` (or the service's subclass)."""
 
 _error_decoder: Decoder[ErrorReply] = Decoder(ErrorReply, what="error reply")
+
+
+def from_message(cls: Callable[[str], Exception]) -> ErrorFactory:
+    """The factory that builds ``cls(reply.message)``."""
+
+    def factory(reply: Any) -> Exception:
+        return cls(reply.message)
+
+    return factory
+
+
+def errors_by_code(*classes: type[Exception]) -> dict[str, ErrorFactory]:
+    """``{cls.code: from_message(cls)}`` for exception classes carrying a ``code``: the client
+    side of :func:`~meshlink.rpc.coded_errors`, so ``except NotFound`` works across the wire."""
+    return {getattr(cls, "code"): from_message(cls) for cls in classes}  # noqa: B009
 
 
 def decode_error(payload: bytes, decoder: Decoder[E] | None = None) -> E | ErrorReply:

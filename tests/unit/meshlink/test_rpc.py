@@ -26,6 +26,8 @@ from meshlink.rpc import (
     decode_error,
     encode,
     error_for,
+    errors_by_code,
+    from_message,
     raise_for_error,
 )
 from meshlink.testing import check_reply, hostile_payloads, payloads
@@ -232,3 +234,12 @@ def test_error_for_maps_codes_and_falls_back_to_remote_error() -> None:
     with pytest.raises(NotFound):
         raise_for_error(ErrorReply(code="not_found", message="gone"), codes)
     raise_for_error(EchoReply(text="fine"), codes)
+
+
+def test_errors_by_code_rebuilds_each_class_from_its_code_and_message() -> None:
+    codes = errors_by_code(ToyError, NotFound)
+    assert set(codes) == {"toy_error", "not_found"}
+    exc = error_for(ErrorReply(code="not_found", message="gone"), codes)
+    assert type(exc) is NotFound and str(exc) == "gone"
+    toy = from_message(ToyError)(ErrorReply(code="anything", message="m"))
+    assert type(toy) is ToyError and str(toy) == "m"
