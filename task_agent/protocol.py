@@ -18,9 +18,7 @@ from typing import Annotated, Literal, TypeAlias
 
 from msgspec import Meta, Struct
 
-from meshlink.rpc import Decoder
-from meshlink.rpc import ErrorReply as ErrorReply
-from meshlink.rpc import encode as encode
+from meshlink.rpc import Decoder, ErrorReply
 from wm_store.protocol import Value
 
 from ._goals import Goal

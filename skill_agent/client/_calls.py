@@ -33,10 +33,10 @@ from typing import Self, TypeVar
 import anyio
 
 from meshlink import Mesh, MeshlinkError, NoReplyError, RemoteError
-from meshlink.rpc import WireError
+from meshlink.rpc import WireError, encode
 from skill_agent._errors import AgentTransportError, SkillError, error_for_reply
 from skill_agent.client._progress import RunFeed, follow_run
-from skill_agent.protocol._codec import decode_reply, encode
+from skill_agent.protocol._codec import decode_reply
 from skill_agent.protocol._runs import (
     AgentReply,
     AgentRequest,

@@ -7,8 +7,8 @@ from __future__ import annotations
 import logging
 
 from meshlink import Mesh
-from meshlink.rpc import WireError
-from skill_agent.protocol._codec import decode_reply, encode
+from meshlink.rpc import WireError, encode
+from skill_agent.protocol._codec import decode_reply
 from skill_agent.protocol._runs import ListSkills, SkillsReply
 
 __all__ = ["find_skills", "list_agents", "liveliness_get"]

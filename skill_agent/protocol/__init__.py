@@ -19,7 +19,6 @@ from ._codec import decode_event as decode_event
 from ._codec import decode_log_entry as decode_log_entry
 from ._codec import decode_reply as decode_reply
 from ._codec import decode_request as decode_request
-from ._codec import encode as encode
 from ._log import LogEntry as LogEntry
 from ._log import ProgressEntry as ProgressEntry
 from ._log import RefusedEntry as RefusedEntry
@@ -114,5 +113,4 @@ __all__ = [
     "decode_log_entry",
     "decode_reply",
     "decode_request",
-    "encode",
 ]

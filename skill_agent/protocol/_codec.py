@@ -1,9 +1,9 @@
-"""MessagePack encoding of every message and typed decoders of the tagged unions, both from
-:mod:`meshlink.rpc` (a decoder's every failure is one :class:`~meshlink.rpc.WireError`)."""
+"""Typed decoders of the skill layer's tagged unions, built once with :mod:`meshlink.rpc`'s
+``Decoder`` (every failure is one :class:`~meshlink.rpc.WireError`); messages are encoded with
+:func:`meshlink.rpc.encode`."""
 
 from __future__ import annotations
 
-from meshlink import rpc
 from meshlink.rpc import Decoder
 from skill_agent.protocol._log import LogEntry
 from skill_agent.protocol._runs import AgentReply, AgentRequest, RunEvent
@@ -13,18 +13,12 @@ __all__ = [
     "decode_log_entry",
     "decode_reply",
     "decode_request",
-    "encode",
 ]
 
 _request: Decoder[AgentRequest] = Decoder(AgentRequest, what="request")
 _reply: Decoder[AgentReply] = Decoder(AgentReply, what="reply")
 _event: Decoder[RunEvent] = Decoder(RunEvent, what="run event")
 _entry: Decoder[LogEntry] = Decoder(LogEntry, what="event-log entry")
-
-
-def encode(message: object) -> bytes:
-    """:func:`meshlink.rpc.encode` (the skill layer's name for it)."""
-    return rpc.encode(message)
 
 
 def decode_request(data: bytes) -> AgentRequest:

@@ -9,7 +9,7 @@ import anyio
 import anyio.lowlevel
 
 from meshlink import Mesh, MeshlinkError
-from skill_agent.protocol._codec import encode
+from meshlink.rpc import encode
 from skill_agent.protocol._log import LogEntry
 from skill_agent.protocol._runs import (
     RunEvent,

@@ -26,6 +26,7 @@ import rerun as rr
 import rerun.chunk
 
 from meshlink import Mesh, MeshConfig, open_mesh
+from meshlink.rpc import encode
 from skill_agent import UnknownSkillError
 from skill_agent.client import AgentClient, EventFeed
 from skill_agent.protocol import (
@@ -36,7 +37,6 @@ from skill_agent.protocol import (
     RunResult,
     RunStartedEntry,
     WmWriteEntry,
-    encode,
 )
 from skill_agent.runtime import EventLog
 from skimesh.recording import AgentEventLines, record_agent_events, step_text

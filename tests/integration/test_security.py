@@ -36,11 +36,12 @@ import msgspec
 import pytest
 
 from meshlink import Answer, IncomingQuery, Mesh, MeshConfig, NoReplyError, SessionError, open_mesh
+from meshlink.rpc import encode
 from meshlink.testing import free_port
 from skill_agent import AgentTransportError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from wm_store import TransportError, WmClient, ZenohTransport
-from wm_store.protocol import AddElement, Transact, encode
+from wm_store.protocol import AddElement, Transact
 
 from .procs import ROOT, Child
 

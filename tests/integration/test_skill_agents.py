@@ -31,7 +31,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from meshlink import Mesh, MeshConfig, open_mesh
-from meshlink.rpc import WireError
+from meshlink.rpc import WireError, encode
 from skill_agent import AgentTransportError, ResourceBusyError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import (
@@ -45,7 +45,6 @@ from skill_agent.protocol import (
     SkillsReply,
     decode_reply,
     decode_request,
-    encode,
 )
 from wm_store import WmClient, ZenohTransport
 from wm_store.protocol import Value

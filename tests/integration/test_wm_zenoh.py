@@ -24,8 +24,9 @@ import msgspec
 import pytest
 
 from meshlink import MeshConfig, open_mesh
+from meshlink.rpc import encode
 from wm_store import WmClient, ZenohTransport
-from wm_store.protocol import AddElement, Change, Element, TemplateDef, encode
+from wm_store.protocol import AddElement, Change, Element, TemplateDef
 
 from .procs import ROOT, Child, start_store, start_worker
 

@@ -22,11 +22,6 @@ class and template definitions), ``_ops`` (transaction ops), ``_changes`` (the c
 ``_requests``, ``_replies`` and ``_codec`` (the decoders).
 """
 
-# meshlink.rpc's ErrorReply and encode stay importable from here for the store's importers;
-# their one public path (``__all__``) is meshlink.rpc.
-from meshlink.rpc import ErrorReply as ErrorReply
-from meshlink.rpc import encode as encode
-
 from ._changes import Change as Change
 from ._changes import ClassDefined as ClassDefined
 from ._changes import Delta as Delta

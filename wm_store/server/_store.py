@@ -27,6 +27,7 @@ import msgspec
 from anyio.abc import TaskStatus
 from msgspec import Meta
 
+from meshlink.rpc import encode
 from wm_store._errors import ConflictError, HistoryCompactedError, StorageError
 from wm_store.durability import Durability
 from wm_store.ontology import Ontology
@@ -37,7 +38,6 @@ from wm_store.protocol import (
     SnapshotReply,
     Transact,
     TransactReply,
-    encode,
 )
 from wm_store.scene import SceneState, Undo, apply_transaction
 

@@ -13,6 +13,7 @@ import anyio.lowlevel
 import pytest
 
 from meshlink import Answer, IncomingQuery, KeySpace, Mesh, MeshConfig, open_mesh
+from meshlink.rpc import encode
 from skill_agent import (
     AgentTransportError,
     BadRequestError,
@@ -45,7 +46,6 @@ from skill_agent.protocol import (
     decode_event,
     decode_reply,
     decode_request,
-    encode,
 )
 from skill_agent.runtime import AgentConfig, AgentCore, SkillEntry
 from skill_agent.server import RunEventPublisher, serve_agent

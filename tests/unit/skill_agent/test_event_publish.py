@@ -9,6 +9,7 @@ import anyio.lowlevel
 import pytest
 
 from meshlink import KeySpace
+from meshlink.rpc import encode
 from skill_agent import UnknownSkillError
 from skill_agent.protocol import (
     LogEntry,
@@ -22,7 +23,6 @@ from skill_agent.protocol import (
     WmWriteEntry,
     decode_event,
     decode_log_entry,
-    encode,
 )
 from skill_agent.runtime import AgentCore, EventLog, entry_agent, entry_run
 from skill_agent.server import RunEventPublisher

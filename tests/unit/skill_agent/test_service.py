@@ -11,7 +11,7 @@ from collections.abc import AsyncIterator
 import msgspec
 import pytest
 
-from meshlink.rpc import DEFAULT_MAX_REQUEST_BYTES, Decoder
+from meshlink.rpc import DEFAULT_MAX_REQUEST_BYTES, Decoder, encode
 from meshlink.testing import check_reply, hostile_payloads
 from skill_agent import (
     AgentInternalError,
@@ -34,7 +34,6 @@ from skill_agent.protocol import (
     SkillsReply,
     StartRun,
     decode_reply,
-    encode,
 )
 from skill_agent.server import AgentService
 from tests.assets.skills import Noop, Probe, entries

@@ -9,6 +9,7 @@ from contextlib import asynccontextmanager
 import anyio
 import pytest
 
+from meshlink.rpc import ErrorReply, encode
 from wm_store import CardinalityError, ElementNotFoundError, InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
@@ -16,12 +17,10 @@ from wm_store.protocol import (
     CardinalityReply,
     CardinalityViolation,
     CheckCardinality,
-    ErrorReply,
     Op,
     Relation,
     Transact,
     decode_reply,
-    encode,
 )
 from wm_store.server import WmService, WmStore
 

@@ -8,6 +8,7 @@ from contextlib import asynccontextmanager
 import anyio
 import pytest
 
+from meshlink.rpc import ErrorReply
 from wm_store import (
     ConflictError,
     DeviceSpec,
@@ -25,7 +26,6 @@ from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
     Change,
-    ErrorReply,
     Info,
     Relation,
     Reply,

@@ -8,14 +8,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from meshlink.rpc import Decoder
+from meshlink.rpc import Decoder, ErrorReply, encode
 from meshlink.testing import check_reply, hostile_payloads
 from wm_store.ontology import Ontology
 from wm_store.protocol import (
     AddElement,
     ChangesSince,
     ElementsReply,
-    ErrorReply,
     GetElements,
     Info,
     InfoReply,
@@ -28,7 +27,6 @@ from wm_store.protocol import (
     Transact,
     TransactReply,
     decode_reply,
-    encode,
 )
 from wm_store.server import WmService, WmStore
 
