@@ -29,7 +29,7 @@ from wm_store._errors import ConflictError, ElementNotFoundError, TransportError
 from wm_store._registration import RobotRegistration, registration_ops, unregistration_ops
 from wm_store._replica import Replica
 from wm_store._transport import WmTransport, raise_for_error
-from wm_store.ontology import Ontology
+from wm_store.ontology import Ontology, property_turtle, relation_turtle
 from wm_store.protocol import (
     AddElement,
     CardinalityReply,
@@ -38,6 +38,7 @@ from wm_store.protocol import (
     ClassDef,
     DefineClass,
     DefineTemplate,
+    DefineTerms,
     Element,
     ElementsReply,
     Info,
@@ -56,6 +57,7 @@ from wm_store.protocol import (
     Sparql,
     SparqlReply,
     TemplateDef,
+    TermsDef,
     Transact,
     TransactReply,
     UnsetRelation,
@@ -76,7 +78,7 @@ class WmClient:
     def __init__(
         self,
         transport: WmTransport,
-        ontology: Ontology,
+        ontology: Ontology | None = None,
         *,
         author: str = "",
         timeout: float = 5.0,
@@ -98,8 +100,13 @@ class WmClient:
         author: str = "",
         timeout: float = 5.0,
     ) -> AsyncIterator[WmClient]:
-        """Start following the store; yields once the local replica holds a snapshot."""
-        client = cls(transport, ontology or Ontology.default(), author=author, timeout=timeout)
+        """Start following the store; yields once the local replica holds a snapshot.
+
+        The client checks against the store's ontology: the core plus everything taught to the
+        store (files it started with, a scenario's terms, agents' terms, ``wm teach``), and
+        follows what is taught later. ``ontology``: replay the store's teaching on this core
+        instead of the store's own (tests)."""
+        client = cls(transport, ontology, author=author, timeout=timeout)
         try:
             async with anyio.create_task_group() as tg:
                 await tg.start(client.replica.run)
@@ -338,6 +345,57 @@ class WmClient:
 
     async def define_template(self, template: TemplateDef) -> int:
         return (await self.transact([DefineTemplate(template=template)])).revision
+
+    async def teach(self, turtle: str, *, source: str = "") -> int:
+        """Teach the store's ontology the Turtle ``turtle`` (classes, relations, data
+        properties, restrictions, templates): persisted, published to every process, exported
+        by ``wm export``. Terms it already has change nothing. Returns the revision after it;
+        this client's :attr:`ontology` has the terms when it returns.
+
+        Raises:
+            OntologyError: the text is not Turtle, or the terms do not fit the ontology.
+        """
+        op = DefineTerms(terms=TermsDef(turtle=turtle, source=source or self.author))
+        return (await self.transact([op])).revision
+
+    async def define_relation(
+        self,
+        name: str,
+        *,
+        domain: Sequence[str] = (),
+        range: Sequence[str] = (),
+        parent: str = "",
+        label: str = "",
+        comment: str = "",
+    ) -> int:
+        """Teach a new relation between classes (SkiROS learns concepts during operation)."""
+        text = relation_turtle(
+            name, domain=domain, range=range, parent=parent, label=label, comment=comment
+        )
+        return await self.teach(text, source=f"relation {name}")
+
+    async def define_property(
+        self,
+        name: str,
+        *,
+        kind: str,
+        domain: Sequence[str] = (),
+        minimum: float | None = None,
+        maximum: float | None = None,
+        label: str = "",
+        comment: str = "",
+    ) -> int:
+        """Teach a new data property of value ``kind`` (float, int, bool, string, Pose...)."""
+        text = property_turtle(
+            name,
+            kind=kind,
+            domain=domain,
+            minimum=minimum,
+            maximum=maximum,
+            label=label,
+            comment=comment,
+        )
+        return await self.teach(text, source=f"property {name}")
 
     # ------------------------------------------------------------------ registration
 

@@ -25,15 +25,18 @@ from anyio.streams.memory import MemoryObjectSendStream
 
 from wm_store._errors import HistoryCompactedError, RevisionTimeoutError
 from wm_store._transport import WmTransport, raise_for_error
-from wm_store.ontology import Ontology
+from wm_store.ontology import Ontology, replay
 from wm_store.protocol import (
     Change,
     ChangesReply,
     ChangesSince,
     ClassDefined,
+    GetOntology,
+    OntologyReply,
     Snapshot,
     SnapshotReply,
     TemplateDefined,
+    TermsDefined,
 )
 from wm_store.scene import SceneState
 
@@ -55,18 +58,21 @@ class Replica:
     def __init__(
         self,
         transport: WmTransport,
-        base_ontology: Ontology,
+        base_ontology: Ontology | None = None,
         *,
         timeout: float = 5.0,
         catch_up_after: float = 0.5,
     ) -> None:
         self.transport = transport
-        self.base_ontology = base_ontology
-        self.ontology = base_ontology
+        self._own_base = base_ontology is not None
+        self.base_ontology = base_ontology or Ontology.default()
+        """The core the store's ontology log is replayed on: the store's own core (this
+        process's core file when the digests agree, else fetched), or the one given."""
+        self.ontology = self.base_ontology
         self.timeout = timeout
         self.catch_up_after = catch_up_after
         self.state = SceneState()
-        self._spatial = frozenset(n for n, r in base_ontology.relations.items() if r.spatial)
+        self._spatial = frozenset(n for n, r in self.base_ontology.relations.items() if r.spatial)
         self.state.set_spatial_predicates(self._spatial)
         self._lock = anyio.Lock()
         self._waiters: dict[int, anyio.Event] = {}
@@ -124,22 +130,36 @@ class Replica:
     async def _load_snapshot(self) -> None:
         reply = raise_for_error(await self.transport.request(Snapshot(), timeout=self.timeout))
         assert isinstance(reply, SnapshotReply)
-        self.state = SceneState.from_snapshot(reply, self._spatial)
-        self.ontology = self.base_ontology
-        if reply.classes or reply.templates:
-            self.ontology = self.base_ontology.extend(
-                classes=reply.classes, templates=reply.templates
-            )
+        if not self._own_base and reply.core_digest not in ("", self.base_ontology.digest):
+            await self._fetch_core()
+        state = SceneState.from_snapshot(reply, self._spatial)
+        self.ontology = await anyio.to_thread.run_sync(
+            replay, self.base_ontology, state.ontology_log
+        )
+        self.state = state
+        self._follow_spatial()
         self._snapshots += 1
         self._notify()
+
+    async def _fetch_core(self) -> None:
+        """The store runs another core ontology than this process's file: take the store's."""
+        reply = raise_for_error(await self.transport.request(GetOntology(), timeout=self.timeout))
+        assert isinstance(reply, OntologyReply)
+        _log.info("the store's core ontology differs from this process's file; using the store's")
+        self.base_ontology = await anyio.to_thread.run_sync(Ontology.load, reply.core)
+
+    def _follow_spatial(self) -> None:
+        spatial = frozenset(n for n, r in self.ontology.relations.items() if r.spatial)
+        if spatial != self._spatial or spatial != self.state.spatial_predicates:
+            self._spatial = spatial
+            self.state.set_spatial_predicates(spatial)
 
     def _apply(self, change: Change) -> None:
         for delta in change.deltas:
             self.state.apply(delta)
-            if isinstance(delta, ClassDefined):
-                self.ontology = self.ontology.extend(classes=[delta.cls])
-            elif isinstance(delta, TemplateDefined):
-                self.ontology = self.ontology.extend(templates=[delta.template])
+            if isinstance(delta, ClassDefined | TemplateDefined | TermsDefined):
+                self.ontology = replay(self.ontology, [delta])
+                self._follow_spatial()
         self.state.revision = change.revision
         self._applied += 1
         for callback in list(self._callbacks):

@@ -89,6 +89,16 @@ def _parse_into(graph: Graph, source: Path | str) -> None:
         raise OntologyError(f"cannot parse {path}: {exc}") from exc
 
 
+def _read(source: Path | str) -> str:
+    """The text of a source (a Turtle text is itself); a file not in Turtle is marked by a
+    leading NUL, so :meth:`Ontology.core_turtle` serializes its graph instead."""
+    if isinstance(source, str) and ("\n" in source or not Path(source).is_file()):
+        return source
+    path = Path(source)
+    text = path.read_text(encoding="utf-8", errors="replace")
+    return text if (guess_format(str(path)) or "turtle") == "turtle" else "\0" + text
+
+
 @functools.cache
 def _default() -> Ontology:
     return Ontology.load(core_ontology_path())
@@ -97,7 +107,7 @@ def _default() -> Ontology:
 class Ontology(OntologyValues):
     """A loaded ontology. Build with :meth:`load` or :meth:`default`; never mutate ``graph``."""
 
-    __slots__ = ("_added_classes", "_added_templates", "_base", "_graph")
+    __slots__ = ("_added_classes", "_added_templates", "_base", "_graph", "_taught", "_texts")
 
     def __init__(
         self,
@@ -106,8 +116,12 @@ class Ontology(OntologyValues):
         *,
         added_classes: tuple[ClassDef, ...] = (),
         added_templates: Mapping[str, TemplateDef] | None = None,
+        texts: tuple[str, ...] = (),
+        taught: Graph | None = None,
     ) -> None:
         self._base = graph
+        self._texts = texts
+        self._taught = taught
         self._added_classes = added_classes
         self._added_templates = dict(added_templates or {})
         self._graph: Graph | None = None
@@ -124,11 +138,13 @@ class Ontology(OntologyValues):
         graph = Graph()
         for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
             graph.bind(prefix, ns)
+        texts = []
         for source in sources:
             _parse_into(graph, source)
+            texts.append(_read(source))
         decl = compile_graph(graph)
         try:
-            return cls(decl, graph)
+            return cls(decl, graph, texts=tuple(texts))
         except ValidationError as exc:
             raise OntologyError(f"in the ontology files: {exc}") from exc
 
@@ -191,7 +207,62 @@ class Ontology(OntologyValues):
             self._base,
             added_classes=self._added_classes + tuple(classes),
             added_templates=added,
+            taught=self._taught,
         )
+
+    def teach(self, terms: str | Graph, *, source: str = "") -> Ontology:
+        """A new ontology with the Turtle ``terms`` added (classes, relations, data
+        properties, restrictions, templates); this one is unchanged. Teaching only adds: the
+        result must compile as a whole, and terms already present change nothing (the result
+        then equals this ontology, see :meth:`same_terms`). ``source`` names the terms in
+        errors. Raises OntologyError."""
+        from wm_store.ontology._teaching import parse_terms, without_known_blank_nodes
+
+        parsed = parse_terms(terms, source) if isinstance(terms, str) else terms
+        parsed = without_known_blank_nodes(parsed + Graph(), self._base)
+        base = Graph()
+        for prefix, ns in self._base.namespaces():
+            base.bind(prefix, ns)
+        base += self._base
+        base += parsed
+        taught = Graph()
+        if self._taught is not None:
+            taught += self._taught
+        taught += parsed
+        whole = base
+        if self._added_classes or self._added_templates:
+            whole = base + self._extension_graph()
+        where = f"the terms from {source}" if source else "the taught terms"
+        try:
+            decl = compile_graph(whole)
+            return Ontology(
+                decl,
+                base,
+                added_classes=self._added_classes,
+                added_templates=self._added_templates,
+                taught=taught,
+            )
+        except (OntologyError, ValidationError) as exc:
+            raise OntologyError(f"{where} do not fit the ontology: {exc}") from exc
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the texts this ontology was loaded from ("" for one built by
+        :meth:`extend` or :meth:`teach`): equal digests mean the same core."""
+        from wm_store.ontology._teaching import text_digest
+
+        return text_digest("\n".join(self._texts)) if self._texts else ""
+
+    def core_turtle(self) -> str:
+        """The Turtle this ontology was loaded from (its one file's text, or the files'
+        graph serialized), without what :meth:`extend` or :meth:`teach` added."""
+        if len(self._texts) == 1 and not self._texts[0].startswith("\0"):
+            return self._texts[0]
+        return self._base.serialize(format="turtle")
+
+    def same_terms(self, other: Ontology) -> bool:
+        """True when both declare the same classes, properties, restrictions and templates."""
+        return self._decl == other._decl
 
     # ----------------------------------------------------------------------- graph views
 
@@ -252,11 +323,23 @@ class Ontology(OntologyValues):
                 g.add((iri, self._iri(key), literal_from_value(value)))
         return g
 
+    def extension_graph(self) -> Graph:
+        """What :meth:`teach` and :meth:`extend` added, as one graph (empty if nothing)."""
+        g = Graph()
+        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
+            g.bind(prefix, ns)
+        if self._added_classes or self._added_templates:
+            g += self._extension_graph()
+        if self._taught is not None:
+            g += self._taught
+        return g
+
     def extension_turtle(self) -> str:
-        """Turtle of what :meth:`extend` added ("" if nothing); loads with the core files."""
-        if not (self._added_classes or self._added_templates):
+        """Turtle of what :meth:`teach` and :meth:`extend` added ("" if nothing); loads with
+        the core files."""
+        if not (self._added_classes or self._added_templates or self._taught):
             return ""
-        return self._extension_graph().serialize(format="turtle")
+        return self.extension_graph().serialize(format="turtle")
 
     def __repr__(self) -> str:
         d = self._decl

@@ -27,15 +27,18 @@ from ._changes import ClassDefined as ClassDefined
 from ._changes import Delta as Delta
 from ._changes import ElementPut as ElementPut
 from ._changes import ElementRemoved as ElementRemoved
+from ._changes import OntologyDelta as OntologyDelta
 from ._changes import RelationAdded as RelationAdded
 from ._changes import RelationRemoved as RelationRemoved
 from ._changes import TemplateDefined as TemplateDefined
+from ._changes import TermsDefined as TermsDefined
 from ._codec import decode_change as decode_change
 from ._codec import decode_reply as decode_reply
 from ._codec import decode_request as decode_request
 from ._ops import AddElement as AddElement
 from ._ops import DefineClass as DefineClass
 from ._ops import DefineTemplate as DefineTemplate
+from ._ops import DefineTerms as DefineTerms
 from ._ops import Observe as Observe
 from ._ops import Op as Op
 from ._ops import RemoveElement as RemoveElement
@@ -47,6 +50,7 @@ from ._replies import CardinalityViolation as CardinalityViolation
 from ._replies import ChangesReply as ChangesReply
 from ._replies import ElementsReply as ElementsReply
 from ._replies import InfoReply as InfoReply
+from ._replies import OntologyReply as OntologyReply
 from ._replies import RelationsReply as RelationsReply
 from ._replies import Reply as Reply
 from ._replies import SnapshotReply as SnapshotReply
@@ -56,6 +60,7 @@ from ._requests import ChangesSince as ChangesSince
 from ._requests import CheckCardinality as CheckCardinality
 from ._requests import Comparator as Comparator
 from ._requests import GetElements as GetElements
+from ._requests import GetOntology as GetOntology
 from ._requests import Info as Info
 from ._requests import Parent as Parent
 from ._requests import PropertyFilter as PropertyFilter
@@ -81,6 +86,7 @@ from ._values import SizeCylinder as SizeCylinder
 from ._values import SizeSphere as SizeSphere
 from ._values import Struct_ as Struct_
 from ._values import TemplateDef as TemplateDef
+from ._values import TermsDef as TermsDef
 from ._values import TypedValue as TypedValue
 from ._values import Value as Value
 
@@ -99,6 +105,7 @@ __all__ = [
     "Comparator",
     "DefineClass",
     "DefineTemplate",
+    "DefineTerms",
     "Delta",
     "Element",
     "ElementPut",
@@ -106,10 +113,13 @@ __all__ = [
     "ElementsReply",
     "Frame",
     "GetElements",
+    "GetOntology",
     "Info",
     "InfoReply",
     "Observation",
     "Observe",
+    "OntologyDelta",
+    "OntologyReply",
     "Op",
     "Orientation",
     "Parent",
@@ -137,6 +147,8 @@ __all__ = [
     "Struct_",
     "TemplateDef",
     "TemplateDefined",
+    "TermsDef",
+    "TermsDefined",
     "Transact",
     "TransactReply",
     "TypedValue",

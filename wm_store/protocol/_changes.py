@@ -6,7 +6,14 @@ from typing import TypeAlias
 
 from msgspec import Struct
 
-from wm_store.protocol._values import SCHEMA_VERSION, ClassDef, Element, Relation, TemplateDef
+from wm_store.protocol._values import (
+    SCHEMA_VERSION,
+    ClassDef,
+    Element,
+    Relation,
+    TemplateDef,
+    TermsDef,
+)
 
 # --------------------------------------------------------------------------- changes
 
@@ -37,8 +44,21 @@ class TemplateDefined(Struct, tag=True, tag_field="delta"):
     template: TemplateDef
 
 
+class TermsDefined(Struct, tag=True, tag_field="delta"):
+    terms: TermsDef
+
+
+OntologyDelta: TypeAlias = ClassDefined | TemplateDefined | TermsDefined
+"""A change to the ontology; the store's ontology is its core file plus these, in order."""
+
 Delta: TypeAlias = (
-    ElementPut | ElementRemoved | RelationAdded | RelationRemoved | ClassDefined | TemplateDefined
+    ElementPut
+    | ElementRemoved
+    | RelationAdded
+    | RelationRemoved
+    | ClassDefined
+    | TemplateDefined
+    | TermsDefined
 )
 
 

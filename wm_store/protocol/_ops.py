@@ -6,7 +6,7 @@ from typing import Literal, TypeAlias
 
 from msgspec import Struct
 
-from wm_store.protocol._values import ClassDef, Relation, TemplateDef, Unit, Value
+from wm_store.protocol._values import ClassDef, Relation, TemplateDef, TermsDef, Unit, Value
 
 # --------------------------------------------------------------------------- transaction ops
 
@@ -79,6 +79,14 @@ class DefineTemplate(Struct, tag=True, tag_field="op", kw_only=True):
     template: TemplateDef
 
 
+class DefineTerms(Struct, tag=True, tag_field="op", kw_only=True):
+    """Teach the ontology terms written in Turtle (classes, relations, data properties,
+    restrictions, templates). Additive and idempotent: terms the ontology already has change
+    nothing, and a transaction of such ops commits no revision."""
+
+    terms: TermsDef
+
+
 Op: TypeAlias = (
     AddElement
     | UpdateElement
@@ -88,4 +96,5 @@ Op: TypeAlias = (
     | UnsetRelation
     | DefineClass
     | DefineTemplate
+    | DefineTerms
 )

@@ -8,7 +8,7 @@ from typing import TypeAlias
 from msgspec import Struct
 
 from meshlink.rpc import ErrorReply
-from wm_store.protocol._changes import Change
+from wm_store.protocol._changes import Change, OntologyDelta
 from wm_store.protocol._values import SCHEMA_VERSION, ClassDef, Element, Relation, TemplateDef
 
 # --------------------------------------------------------------------------- replies
@@ -48,6 +48,22 @@ class SnapshotReply(Struct, tag=True, tag_field="reply", kw_only=True):
     classes: list[ClassDef] = []
     templates: list[TemplateDef] = []
     counters: dict[str, int] = {}
+    schema_version: int = SCHEMA_VERSION
+    ontology: list[OntologyDelta] = []
+    """Everything the ontology gained beyond its core file, in order (classes, templates and
+    taught terms); when set, ``classes`` and ``templates`` are left empty."""
+    core_digest: str = ""
+    """SHA-256 of the store's core ontology text: a client whose own core file differs
+    fetches the store's with :class:`~wm_store.protocol.GetOntology`."""
+
+
+class OntologyReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    """The store's ontology: its ``core`` Turtle text and what was taught since, in order."""
+
+    revision: int
+    core: str
+    core_digest: str
+    taught: list[OntologyDelta] = []
     schema_version: int = SCHEMA_VERSION
 
 
@@ -102,5 +118,6 @@ Reply: TypeAlias = (
     | ChangesReply
     | InfoReply
     | CardinalityReply
+    | OntologyReply
     | ErrorReply
 )

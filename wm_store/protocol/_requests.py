@@ -93,6 +93,11 @@ class Info(Struct, tag=True, tag_field="request", kw_only=True):
     pass
 
 
+class GetOntology(Struct, tag=True, tag_field="request", kw_only=True):
+    """The store's ontology (:class:`~wm_store.protocol.OntologyReply`): the one every
+    process of the mesh checks against."""
+
+
 class CheckCardinality(Struct, tag=True, tag_field="request", kw_only=True):
     """Which elements fall short of a minimum cardinality of their class (read-only).
 
@@ -114,4 +119,5 @@ Request: TypeAlias = (
     | ChangesSince
     | Info
     | CheckCardinality
+    | GetOntology
 )

@@ -135,6 +135,15 @@ class ClassDef(Struct, frozen=True, kw_only=True):
     comment: str = ""
 
 
+class TermsDef(Struct, frozen=True, kw_only=True):
+    """Ontology terms taught as Turtle: classes, relations, data properties, cardinalities,
+    templates. Teaching only adds; ``source`` says where the terms came from (a file name, a
+    scenario, an agent, ``cli``) for ``skimesh wm ontology`` and error messages."""
+
+    turtle: str
+    source: str = ""
+
+
 class TemplateDef(Struct, frozen=True, kw_only=True):
     """A default individual: a named template with default properties (SkiROS
     ``getDefaultElement``)."""

@@ -140,12 +140,18 @@ def ontology_iri(ontology: Ontology) -> URIRef:
     return URIRef(str(ontology.namespace).rstrip("#/"))
 
 
-def export_turtle(state: SceneState, ontology: Ontology, *, metadata: bool = False) -> str:
+def export_turtle(
+    state: SceneState, ontology: Ontology, *, metadata: bool = False, terms: bool = True
+) -> str:
     """The scene as Turtle: prefixes, an ``owl:Ontology`` header importing the skimesh
-    ontology, then one block per element in subject order. Deterministic: the same state gives
-    the same text. Blocks for rdflib's serializer, linear in the scene (see docs/benchmarks.md,
-    section "World model")."""
+    ontology, the terms taught to the ontology beyond its core (``terms``: classes, relations,
+    properties, templates; :func:`~wm_store.rdf.import_turtle` teaches them back first), then
+    one block per element in subject order. Deterministic: the same state gives the same text.
+    Blocks for rdflib's serializer, linear in the scene (see docs/benchmarks.md, section
+    "World model")."""
     g = new_graph(ontology)
+    if terms:
+        g += ontology.extension_graph()
     header = URIRef(SCENE_IRI)
     g.add((header, RDF.type, OWL.Ontology))
     g.add((header, OWL.imports, ontology_iri(ontology)))

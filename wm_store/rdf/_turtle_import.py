@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Iterator, Mapping
 
 import msgspec
-from rdflib import Graph, Literal, URIRef
+from rdflib import BNode, Graph, Literal, URIRef
 from rdflib.namespace import OWL, RDF, RDFS
 from rdflib.term import Node
 
@@ -28,12 +28,14 @@ from wm_store._errors import (
 from wm_store.ontology import Ontology, value_from_literal
 from wm_store.protocol import (
     AddElement,
+    DefineTerms,
     Frame,
     Op,
     Orientation,
     Pose,
     Position,
     Relation,
+    TermsDef,
     Value,
 )
 from wm_store.rdf._graph import IGNORED_NAMESPACES, METADATA_PREDICATES, local_name, vocabulary
@@ -41,6 +43,7 @@ from wm_store.scene import SceneState, id_sort_key, parse_id
 
 __all__ = ["import_turtle"]
 
+_TEMPLATE = URIRef("https://skimesh.dev/ontology#template")
 _NOT_INDIVIDUALS = frozenset(
     {OWL.Class, RDFS.Class, OWL.ObjectProperty, OWL.DatatypeProperty, OWL.AnnotationProperty}
     | {RDFS.Datatype, OWL.Restriction, OWL.AllDifferent, OWL.Axiom}
@@ -59,7 +62,10 @@ class _Individual:
 def import_turtle(
     text: str, ontology: Ontology, *, keep_ids: bool = True, state: SceneState | None = None
 ) -> list[Op]:
-    """Transaction ops that add the individuals of a Turtle scene.
+    """Transaction ops that add the individuals of a Turtle scene, after a
+    :class:`~wm_store.protocol.DefineTerms` of the ontology terms the file declares (classes,
+    properties, restrictions, templates, as :func:`~wm_store.rdf.export_turtle` writes them or
+    Protégé saves them): an exported site imports whole.
 
     Every IRI subject (but the ``owl:Ontology`` header) is an individual and becomes an
     :class:`~wm_store.protocol.AddElement`: ``ref`` is the IRI's local name (``:meal_box`` ->
@@ -83,13 +89,49 @@ def import_turtle(
     Raises ``ValidationError`` for text that is not Turtle (rdflib's message and line), a
     property given twice or a literal/individual in the wrong place; ``UnknownClassError`` /
     ``UnknownRelationError`` / ``UnknownPropertyError`` (with suggestions) for unknown names;
-    ``OntologyError`` naming an individual without exactly one most specific skimesh class, or a
-    subject that declares a class or property (extend the ontology with ``Ontology.load``);
+    ``OntologyError`` naming an individual without exactly one most specific skimesh class, or
+    terms that do not fit the ontology;
     ``PropertyValueError`` for a malformed value. Pure; blocks for a time linear in the
     individuals, mostly rdflib's Turtle parser (see docs/benchmarks.md, section "World model").
     """
+    graph = _parse(text)
+    ops: list[Op] = []
+    terms = _split_terms(graph)
+    if len(terms):
+        ontology = ontology.teach(terms, source="the imported file")
+        turtle = terms.serialize(format="turtle")
+        ops.append(DefineTerms(terms=TermsDef(turtle=turtle, source="import")))
     counters = state.counters if state is not None else {}
-    return _Importer(_parse(text), ontology).ops(keep_ids, counters)
+    return ops + _Importer(graph, ontology).ops(keep_ids, counters)
+
+
+def _split_terms(graph: Graph) -> Graph:
+    """Move the ontology terms out of ``graph`` (declared classes and properties, templates,
+    with the blank nodes they use) into a graph of their own."""
+    terms = Graph()
+    for prefix, ns in graph.namespaces():
+        terms.bind(prefix, ns)
+    todo: list[Node] = [
+        s
+        for s in set(graph.subjects())
+        if isinstance(s, URIRef)
+        and (
+            set(graph.objects(s, RDF.type)) & _NOT_INDIVIDUALS
+            or any(value_from_literal(o) is True for o in graph.objects(s, _TEMPLATE))
+        )
+    ]
+    seen: set[Node] = set()
+    while todo:
+        subject = todo.pop()
+        if subject in seen:
+            continue
+        seen.add(subject)
+        for triple in list(graph.triples((subject, None, None))):
+            terms.add(triple)
+            graph.remove(triple)
+            if isinstance(triple[2], BNode):
+                todo.append(triple[2])
+    return terms
 
 
 def _parse(text: str) -> Graph:
@@ -128,11 +170,6 @@ class _Importer:
             types = set(self.graph.objects(subject, RDF.type))
             if OWL.Ontology in types:
                 continue
-            if types & _NOT_INDIVIDUALS:
-                raise OntologyError(
-                    f"{self.show(subject)} declares a class or property; a scene file holds "
-                    "individuals only (load ontology extensions with Ontology.load)"
-                )
             ref = local_name(subject)
             if ref in by_ref:
                 raise ValidationError(

@@ -29,12 +29,14 @@ from wm_store.protocol import (
     Element,
     ElementPut,
     ElementRemoved,
+    OntologyDelta,
     Relation,
     RelationAdded,
     RelationRemoved,
     SnapshotReply,
     TemplateDef,
     TemplateDefined,
+    TermsDefined,
 )
 from wm_store.scene._numeric_index import NumericIndexes
 
@@ -51,16 +53,12 @@ class _RestoreRelation(msgspec.Struct, frozen=True):
     present: bool
 
 
-class _RestoreClasses(msgspec.Struct, frozen=True):
+class _RestoreOntology(msgspec.Struct, frozen=True):
     count: int
+    """The length of the ontology log before the delta."""
 
 
-class _RestoreTemplate(msgspec.Struct, frozen=True):
-    name: str
-    previous: TemplateDef | None
-
-
-Undo: TypeAlias = _RestoreElement | _RestoreRelation | _RestoreClasses | _RestoreTemplate
+Undo: TypeAlias = _RestoreElement | _RestoreRelation | _RestoreOntology
 
 
 def parse_id(element_id: str) -> tuple[str, int] | None:
@@ -77,6 +75,9 @@ class SceneState:
     def __init__(self) -> None:
         self.revision = 0
         self.elements: dict[str, Element] = {}
+        self.ontology_log: list[OntologyDelta] = []
+        """What the ontology gained beyond the core, in order (replayed by
+        :func:`wm_store.ontology.replay`)."""
         self.classes: list[ClassDef] = []
         self.templates: dict[str, TemplateDef] = {}
         self.counters: dict[str, int] = {}
@@ -195,13 +196,10 @@ class SceneState:
                 return self.add_relation(r)
             case RelationRemoved(relation=r):
                 return self.remove_relation(r)
-            case ClassDefined(cls=c):
-                self.classes.append(c)
-                return _RestoreClasses(len(self.classes) - 1)
-            case TemplateDefined(template=t):
-                previous = self.templates.get(t.name)
-                self.templates[t.name] = t
-                return _RestoreTemplate(t.name, previous)
+            case ClassDefined() | TemplateDefined() | TermsDefined():
+                self.ontology_log.append(delta)
+                self._index_ontology(delta)
+                return _RestoreOntology(len(self.ontology_log) - 1)
         raise TypeError(f"not a delta: {delta!r}")  # pragma: no cover - exhaustive match
 
     def undo(self, record: Undo) -> None:
@@ -216,13 +214,17 @@ class SceneState:
                     self.add_relation(r)
                 else:
                     self.remove_relation(r)
-            case _RestoreClasses(count=count):
-                del self.classes[count:]
-            case _RestoreTemplate(name=name, previous=previous):
-                if previous is None:
-                    self.templates.pop(name, None)
-                else:
-                    self.templates[name] = previous
+            case _RestoreOntology(count=count):
+                del self.ontology_log[count:]
+                self.classes, self.templates = [], {}
+                for entry in self.ontology_log:
+                    self._index_ontology(entry)
+
+    def _index_ontology(self, delta: OntologyDelta) -> None:
+        if isinstance(delta, ClassDefined):
+            self.classes.append(delta.cls)
+        elif isinstance(delta, TemplateDefined):
+            self.templates[delta.template.name] = delta.template
 
     def put_element(self, element: Element) -> Undo:
         previous = self.elements.get(element.id)
@@ -306,9 +308,8 @@ class SceneState:
             revision=self.revision,
             elements=list(self.elements.values()),
             relations=self.all_relations(),
-            classes=list(self.classes),
-            templates=list(self.templates.values()),
             counters=dict(self.counters),
+            ontology=list(self.ontology_log),
         )
 
     @classmethod
@@ -319,8 +320,12 @@ class SceneState:
             state.put_element(e)
         for r in snap.relations:
             state.add_relation(r)
-        state.classes = list(snap.classes)
-        state.templates = {t.name: t for t in snap.templates}
+        log: list[OntologyDelta] = list(snap.ontology)
+        if not log:  # a snapshot written before the ontology log: classes, then templates
+            log = [ClassDefined(c) for c in snap.classes]
+            log += [TemplateDefined(t) for t in snap.templates]
+        for delta in log:
+            state.apply(delta)
         for name, n in snap.counters.items():
             state.counters[name] = max(n, state.counters.get(name, 0))
         state.revision = snap.revision

@@ -18,10 +18,11 @@ as before. Rules enforced here:
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 import msgspec
+from rdflib import Graph
 
 from wm_store._errors import (
     ConflictError,
@@ -36,6 +37,7 @@ from wm_store.protocol import (
     ClassDefined,
     DefineClass,
     DefineTemplate,
+    DefineTerms,
     Delta,
     Element,
     ElementPut,
@@ -49,6 +51,8 @@ from wm_store.protocol import (
     RemoveElement,
     SetRelation,
     TemplateDefined,
+    TermsDef,
+    TermsDefined,
     UnsetRelation,
     UpdateElement,
     Value,
@@ -76,13 +80,16 @@ def apply_transaction(
     *,
     revision: int,
     now: float | None = None,
+    parsed_terms: Mapping[int, Graph] | None = None,
 ) -> TxnResult:
     """Apply ``ops`` to ``state`` as revision ``revision``; all or nothing.
 
-    Raises a :class:`~wm_store.WmError` subclass naming the op (by index) and the
-    problem; the state is then unchanged.
+    ``parsed_terms``: the Turtle of :class:`DefineTerms` ops already parsed (by op index), so
+    a caller can parse off its event loop. Raises a :class:`~wm_store.WmError` subclass naming
+    the op (by index) and the problem; the state is then unchanged.
     """
     txn = _Txn(state, ontology, revision, time.time() if now is None else now)
+    txn.parsed_terms = parsed_terms or {}
     counters = dict(state.counters)
     try:
         for index, op in enumerate(ops):
@@ -107,6 +114,7 @@ class _Txn:
         self.deltas: list[Delta] = []
         self.undo: list[Undo] = []
         self.ids: dict[str, str] = {}
+        self.parsed_terms: Mapping[int, Graph] = {}
 
     # ------------------------------------------------------------------ plumbing
 
@@ -164,6 +172,19 @@ class _Txn:
             case DefineTemplate(template=template):
                 self.ontology = self.ontology.extend(templates=[template])
                 self._emit(TemplateDefined(template))
+            case DefineTerms(terms=terms):
+                self._teach(index, terms)
+
+    def _teach(self, index: int, terms: TermsDef) -> None:
+        source = self.parsed_terms.get(index, terms.turtle)
+        taught = self.ontology.teach(source, source=terms.source or f"op #{index}")
+        if taught.same_terms(self.ontology):
+            return  # already known: nothing changes, nothing is published
+        self.ontology = taught
+        spatial = frozenset(n for n, r in taught.relations.items() if r.spatial)
+        if spatial != self.state.spatial_predicates:
+            self.state.set_spatial_predicates(spatial)
+        self._emit(TermsDefined(terms))
 
     def _add(self, index: int, op: AddElement) -> None:
         element_type = self.ontology.check_class(op.type)

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import logging
 
+import msgspec
+
 from meshlink.rpc import BAD_REQUEST, DEFAULT_MAX_REQUEST_BYTES, ErrorReply, RequestHandler
 from wm_store._errors import ElementNotFoundError, ProtocolError, WmError
 from wm_store.protocol import (
@@ -25,6 +27,7 @@ from wm_store.protocol import (
     CheckCardinality,
     ElementsReply,
     GetElements,
+    GetOntology,
     Info,
     Parent,
     Relations,
@@ -119,11 +122,14 @@ class WmService:
             case Transact():
                 return await store.transact(request)
             case Snapshot(revision=revision):
-                return store.snapshot(revision)
+                snap = store.snapshot(revision)
+                return msgspec.structs.replace(snap, core_digest=store.core_digest)
             case ChangesSince(revision=revision, limit=limit):
                 return store.changes_since(revision, limit)
             case Info():
                 return store.info()
+            case GetOntology():
+                return store.ontology_reply()
             case CheckCardinality(ids=ids):
                 checked, violations = min_cardinality_violations(state, store.ontology, ids)
                 return CardinalityReply(

@@ -30,12 +30,16 @@ from msgspec import Meta
 from meshlink.rpc import encode
 from wm_store._errors import ConflictError, HistoryCompactedError, StorageError
 from wm_store.durability import Durability
-from wm_store.ontology import Ontology
+from wm_store.ontology import Ontology, parse_terms, replay
 from wm_store.protocol import (
     Change,
     ChangesReply,
+    DefineTerms,
     InfoReply,
+    OntologyReply,
+    Op,
     SnapshotReply,
+    TermsDef,
     Transact,
     TransactReply,
 )
@@ -85,6 +89,7 @@ class WmStore:
         self.started_at = time.time()
         self.recovery_detail = ""
         self._base_ontology = ontology
+        self._core_text: str | None = None
         self._durability: Durability | None = None
         self._history: deque[_Entry] = deque(maxlen=self.config.history)
         self._txn_revisions: OrderedDict[str, TransactReply] = OrderedDict()
@@ -131,10 +136,10 @@ class WmStore:
         self.recovery_detail = "; ".join(d for d in details if d)
 
     def _reload_ontology(self) -> None:
-        if self.state.classes or self.state.templates:
-            self.ontology = self._base_ontology.extend(
-                classes=self.state.classes, templates=list(self.state.templates.values())
-            )
+        self.ontology = replay(self._base_ontology, self.state.ontology_log)
+        self.state.set_spatial_predicates(
+            n for n, r in self.ontology.relations.items() if r.spatial
+        )
 
     async def run(self, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED) -> None:
         """Drive the durable log and periodic snapshots until cancelled."""
@@ -178,6 +183,11 @@ class WmStore:
             first = self._txn_revisions[request.txn_id]
             await self._wait_published(first.revision)
             return msgspec.structs.replace(first, duplicate=True)
+        parsed = {
+            i: await anyio.to_thread.run_sync(parse_terms, op.terms.turtle, op.terms.source)
+            for i, op in enumerate(request.ops)
+            if isinstance(op, DefineTerms)
+        }  # Turtle is parsed off the event loop; the state is read only after this point
         if request.expect_revision is not None and request.expect_revision != self.state.revision:
             raise ConflictError(
                 f"the store is at revision {self.state.revision}, "
@@ -186,8 +196,10 @@ class WmStore:
         revision = self.state.revision + 1
         now = time.time()
         result = apply_transaction(
-            self.state, self.ontology, request.ops, revision=revision, now=now
+            self.state, self.ontology, request.ops, revision=revision, now=now, parsed_terms=parsed
         )
+        if not result.deltas:  # nothing changed (e.g. terms the ontology already has)
+            return TransactReply(revision=self.state.revision, ids=result.ids)
         self.state.revision = revision
         self.ontology = result.ontology
         refs = {k: v for k, v in result.ids.items() if not k.startswith("#")}
@@ -263,6 +275,29 @@ class WmStore:
     @property
     def revision(self) -> int:
         return self.state.revision
+
+    async def teach(self, turtle: str, source: str, *, author: str = "") -> int:
+        """Teach the ontology the Turtle ``turtle`` (a no-op if it adds nothing); returns the
+        revision after it. Raises OntologyError naming ``source``."""
+        ops: list[Op] = [DefineTerms(terms=TermsDef(turtle=turtle, source=source))]
+        reply = await self.transact(Transact(ops=ops, author=author or "wm"))
+        return reply.revision
+
+    def ontology_reply(self) -> OntologyReply:
+        """The store's ontology: its core text and what was taught since, in order."""
+        if self._core_text is None:
+            self._core_text = self._base_ontology.core_turtle()
+        return OntologyReply(
+            revision=self.state.revision,
+            core=self._core_text,
+            core_digest=self._base_ontology.digest,
+            taught=list(self.state.ontology_log),
+        )
+
+    @property
+    def core_digest(self) -> str:
+        """The digest of the core ontology the store's log is replayed on."""
+        return self._base_ontology.digest
 
     def snapshot(self, revision: int | None = None) -> SnapshotReply:
         """The scene now, or at an earlier ``revision`` still within the kept history."""
