@@ -115,6 +115,7 @@ def _resolve_paths(scenario: Scenario, base: Path) -> Scenario:
         appliances=[
             msgspec.structs.replace(a, agent=resolve(a.agent)) for a in scenario.appliances
         ],
+        ontology=[resolve(p) for p in scenario.ontology],
     )
 
 

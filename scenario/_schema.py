@@ -313,6 +313,10 @@ class Scenario(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     sensors: list[SensorEntry] = []
     goals: list[str] = []
     """Goal facts as text, e.g. ``contain(KitBox-1, Gear-1)``; the task layer parses them."""
+    ontology: list[str] = []
+    """Turtle files with the scenario's own ontology terms (classes such as a new part type,
+    relations, data properties, templates), relative to the scenario file; taught to the
+    world model's ontology, for the whole mesh, when the scene is loaded."""
     source: str = ""
     """The file it was read from (set by the loader)."""
 

@@ -121,6 +121,10 @@ class Skill:
     """Element parameters whose world-model data ``pre_sense`` / ``post_sense`` refresh."""
     success_probability: ClassVar[float] = 1.0
     """Default probability of success in simulated-outcome mode (config may override)."""
+    ontology: ClassVar[Sequence[str]] = ()
+    """Turtle files with the ontology terms this skill needs (e.g. a data property its
+    post-condition sets), relative to the file that defines the class. The agent teaches them
+    to the world model before it checks its skills: every process of the mesh has them."""
 
     async def pre_sense(self, ctx: SkillContext) -> None:
         """Refresh what the pre-conditions read. Default: nothing to sense."""

@@ -2,7 +2,8 @@
 
 :func:`scenario_ops` turns a :class:`~scenario.Scenario` into the ops of one transaction;
 :func:`scene_ops` is what a store or a client writes to load it once (reusing elements that
-agents registered first); :func:`scene_loaded` tells whether the scene is there already.
+agents registered first), after the scenario's own ontology terms (:func:`scenario_terms`);
+:func:`scene_loaded` tells whether the scene is there already.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from ._robots import HOME_7 as HOME_7
 from ._robots import REACH_FRACTION as REACH_FRACTION
 from ._robots import device_label as device_label
 from ._robots import home_label as home_label
+from ._scene import scenario_terms as scenario_terms
 from ._scene import scene_loaded as scene_loaded
 from ._scene import scene_ops as scene_ops
 
@@ -34,6 +36,7 @@ __all__ = [
     "door_label",
     "home_label",
     "scenario_ops",
+    "scenario_terms",
     "scene_loaded",
     "scene_ops",
     "template_capacity",

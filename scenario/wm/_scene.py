@@ -2,7 +2,8 @@
 
 :func:`scene_ops` is what ``skimesh wm --scenario S`` (the store, at its start),
 ``skimesh wm import-scenario S`` (a client of a running store) and ``skimesh demo`` write: the
-ops of :func:`scenario.wm.scenario_ops`, in one transaction.
+scenario's own ontology terms (:func:`scenario_terms`, its ``ontology`` files), then the ops of
+:func:`scenario.wm.scenario_ops`, in one transaction.
 
 - **Once**: a world model that already holds any of the scenario's furniture or parts has its
   scene (a durable store restarted with ``--scenario``, an import repeated): nothing to write.
@@ -16,13 +17,18 @@ file; an unknown name is a :class:`~device_drivers.ScenarioError` naming the kno
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+
+from scenario._errors import ScenarioError
 from scenario._schema import Scenario
 from scenario.wm._ops import scenario_ops
+from wm_store import WmError
 from wm_store.ontology import Ontology
-from wm_store.protocol import AddElement, Op
+from wm_store.protocol import AddElement, DefineTerms, Op, TermsDef
 from wm_store.scene import SceneState
 
-__all__ = ["scene_loaded", "scene_ops"]
+__all__ = ["scenario_terms", "scene_loaded", "scene_ops"]
 
 _NOT_SCENE = ("Agent", "Skill")
 """Classes of what agents register beside their robot: never a scenario's element."""
@@ -34,11 +40,45 @@ def scene_loaded(scenario: Scenario, state: SceneState) -> list[str]:
     return [label for label in labels if state.ids_with_label(label)]
 
 
-def scene_ops(scenario: Scenario, state: SceneState, ontology: Ontology) -> list[Op]:
+def scenario_terms(scenario: Scenario) -> list[DefineTerms]:
+    """The scenario's ontology terms (its ``ontology`` files), one op per file. Reads files:
+    call it off the event loop. Raises ScenarioError naming a missing or unreadable file."""
+    ops = []
+    for name in scenario.ontology:
+        path = Path(name)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ScenarioError(
+                f"scenario {scenario.name!r}: cannot read its ontology file {name}: {exc}"
+            ) from exc
+        ops.append(DefineTerms(terms=TermsDef(turtle=text, source=path.name)))
+    return ops
+
+
+def scene_ops(
+    scenario: Scenario,
+    state: SceneState,
+    ontology: Ontology,
+    *,
+    terms: Sequence[DefineTerms] | None = None,
+) -> list[Op]:
     """The ops that load ``scenario``'s scene into a world model holding ``state`` (see the
-    module doc); ``[]`` when the scene is there already. Refs are ``$<label>``."""
+    module doc): first the scenario's ontology terms (``terms``, default
+    :func:`scenario_terms`), then its elements; only the terms when the scene is there already
+    (teaching known terms changes nothing). Refs are ``$<label>``."""
+    terms = scenario_terms(scenario) if terms is None else terms
     if scene_loaded(scenario, state):
-        return []
+        return list(terms)
+    for op in terms:
+        try:
+            ontology = ontology.teach(op.terms.turtle, source=op.terms.source)
+        except WmError as exc:
+            raise ScenarioError(f"scenario {scenario.name!r}: {exc}") from exc
+    return [*terms, *_element_ops(scenario, state, ontology)]
+
+
+def _element_ops(scenario: Scenario, state: SceneState, ontology: Ontology) -> list[Op]:
     labels = [op.label for op in scenario_ops(scenario, ontology=ontology)
               if isinstance(op, AddElement)]  # fmt: skip
     existing: dict[str, str] = {}

@@ -154,6 +154,23 @@ class SkillRegistry:
         in place if anything fails). Raises :class:`SkillLoadError`."""
         return self._build(fresh=True)
 
+    def shipped_terms(self) -> list[Path]:
+        """The Turtle files the skills ship (:attr:`Skill.ontology`), in load order, once
+        each. Imports the skills (as :meth:`load` does) without checking them, so an agent
+        can teach these terms before the check. Raises :class:`SkillLoadError`."""
+        with self._lock:
+            loader = _Loader(fresh=False)
+            refs = [(p, "config") for p in self.paths]
+            refs += entry_point_skills(self.entry_point_names)
+            found: list[Path] = []
+            for ref, origin in refs:
+                for skill_cls in loader.classes(ref, origin):
+                    for name in skill_cls.ontology:
+                        path = _beside(skill_cls, name)
+                        if path not in found:
+                            found.append(path)
+            return found
+
     # ------------------------------------------------------------------ internals
 
     def _build(self, *, fresh: bool) -> dict[str, SkillEntry]:
@@ -212,6 +229,18 @@ class SkillRegistry:
             raise SkillLoadError(f"condition module {module.__name__!r} defines no condition class")
         for cls in found:
             self.conditions.register(cls, replace=replace)
+
+
+def _beside(cls: type[Skill], name: str) -> Path:
+    path = Path(name)
+    if not path.is_absolute():
+        path = Path(inspect.getfile(cls)).resolve().parent / path
+    if not path.is_file():
+        raise SkillLoadError(
+            f"skill {cls.description.name!r} ({cls.__module__}) ships ontology file {name!r}, "
+            f"but there is no {path}"
+        )
+    return path
 
 
 def _factory(cls: type[Skill], context: Mapping[str, object]) -> Callable[[], Skill]:

@@ -13,6 +13,7 @@ import msgspec
 from anyio.abc import TaskStatus
 
 from meshlink import Mesh
+from skill_agent._errors import SkillLoadError
 from skill_agent.protocol._skills import SkillDescription
 from skill_agent.runtime._agent import AgentCore
 from skill_agent.runtime._config import AgentConfig
@@ -23,7 +24,6 @@ from skill_agent.runtime._wiring import bind_devices, bind_hardware
 from skill_agent.server._publisher import RunEventPublisher
 from skill_agent.server._service import AgentService
 from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
-from wm_store.ontology import Ontology, core_ontology_path
 
 __all__ = ["agent_registration", "run_agent", "serve_agent", "simulated_outcomes"]
 
@@ -132,10 +132,29 @@ async def serve_agent(
         _log.info("agent %s stopped", name)
 
 
-def _ontology(config: AgentConfig) -> Ontology:
-    if not config.ontology:
-        return Ontology.default()
-    return Ontology.load(core_ontology_path(), *(Path(p) for p in config.ontology))
+def _terms(config: AgentConfig, registry: SkillRegistry) -> list[tuple[str, str]]:
+    """(source, Turtle) of the agent's ``ontology`` files, then of the files its skills ship."""
+    paths = [Path(p) for p in config.ontology]
+    paths += [p for p in registry.shipped_terms() if p not in paths]
+    out = []
+    for path in paths:
+        try:
+            out.append((f"{config.name}: {path.name}", path.read_text(encoding="utf-8")))
+        except (OSError, UnicodeDecodeError) as exc:
+            raise SkillLoadError(f"agent {config.name!r}: ontology file {path}: {exc}") from exc
+    return out
+
+
+async def teach_terms(wm: WmClient, config: AgentConfig, registry: SkillRegistry) -> None:
+    """Teach the world model the agent's and its skills' ontology terms (known terms change
+    nothing), so every process of the mesh checks against them; then the registry checks the
+    skills against the result."""
+    for source, text in await anyio.to_thread.run_sync(_terms, config, registry):
+        try:
+            await wm.teach(text, source=source)
+        except WmError as exc:
+            raise SkillLoadError(f"agent {config.name!r}: {exc}") from exc
+    registry.ontology = wm.ontology
 
 
 def simulated_outcomes(config: AgentConfig, *, force: bool = False) -> SimulatedOutcomes | None:
@@ -165,10 +184,10 @@ async def run_agent(
         SkillLoadError: a skill or the config does not load (WiringError: a device label
             names no element). WmError: no world model.
     """
-    ontology = await anyio.to_thread.run_sync(_ontology, config)
     transport = ZenohTransport(mesh)
-    async with WmClient.connect(transport, ontology, author=config.name, timeout=wm_timeout) as wm:
+    async with WmClient.connect(transport, author=config.name, timeout=wm_timeout) as wm:
         registry = SkillRegistry.from_config(config, wm.ontology, context={"mesh": mesh})
+        await teach_terms(wm, config, registry)
         entries = await anyio.to_thread.run_sync(registry.load)
         config.check_skill_names(entries)
         log_path = Path(config.event_log) if config.event_log else None

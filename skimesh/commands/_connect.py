@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from meshlink import Mesh, mesh_config_from_args, open_mesh
 from wm_store import WmClient, ZenohTransport
 
-__all__ = ["mesh_session", "wm_session"]
+__all__ = ["mesh_session", "read_terms", "wm_session"]
 
 
 @asynccontextmanager
@@ -20,9 +21,27 @@ async def mesh_session(args: argparse.Namespace) -> AsyncIterator[Mesh]:
 
 @asynccontextmanager
 async def wm_session(args: argparse.Namespace, *, author: str = "cli") -> AsyncIterator[WmClient]:
-    """A world-model client with a loaded replica, for one command."""
+    """A world-model client with a loaded replica, for one command. It checks against the
+    store's ontology (``--ontology`` files belong to the store: refused here)."""
+    if getattr(args, "ontology", None):
+        raise SystemExit(
+            "--ontology teaches a store at its start; a client takes the store's ontology. "
+            "Teach a running store with `skimesh wm teach FILE.ttl`"
+        )
     async with (
         mesh_session(args) as mesh,
         WmClient.connect(ZenohTransport(mesh), author=author, timeout=args.timeout) as client,
     ):
         yield client
+
+
+def read_terms(files: list[str]) -> list[tuple[str, str]]:
+    """(file name, Turtle text) of each file of ontology terms; SystemExit naming a missing
+    one. Reads files: call it before the event loop runs."""
+    out = []
+    for name in files:
+        path = Path(name)
+        if not path.is_file():
+            raise SystemExit(f"no ontology file {name}")
+        out.append((path.name, path.read_text(encoding="utf-8")))
+    return out

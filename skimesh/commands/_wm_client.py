@@ -25,6 +25,7 @@ from wm_store.scene import SceneState, id_sort_key
 from ..runtime import run_service
 from ._connect import wm_session
 from ._render import element_line, render_tree
+from ._teach import add_ontology_commands
 
 __all__ = ["add_client_commands"]
 
@@ -35,6 +36,7 @@ def add_client_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     """Add the client sub-commands to ``skimesh wm``'s sub-parsers."""
     _add_read_commands(cmds)
     _add_write_commands(cmds)
+    add_ontology_commands(cmds)
 
 
 _JSON_HELP = "machine-readable output: one JSON value on stdout"
@@ -347,14 +349,17 @@ def _import(args: argparse.Namespace) -> int:
 
 
 def _import_scenario(args: argparse.Namespace) -> int:
-    from scenario.wm import scene_loaded, scene_ops
+    from scenario.wm import scenario_terms, scene_loaded, scene_ops
     from skimesh.paths import read_scenario
 
     scenario = read_scenario(args.name)
+    terms = scenario_terms(scenario)
 
     async def body(wm: WmClient) -> int:
-        ops = scene_ops(scenario, wm.replica.state, wm.ontology)
-        if not ops:
+        ops = scene_ops(scenario, wm.replica.state, wm.ontology, terms=terms)
+        if scene_loaded(scenario, wm.replica.state):
+            if ops:  # its ontology terms, in case the files gained some since
+                await wm.transact(ops)
             there = ", ".join(scene_loaded(scenario, wm.replica.state)[:3])
             print(f"scenario {scenario.name!r} is in the world model already ({there}): "
                   "nothing imported")  # fmt: skip

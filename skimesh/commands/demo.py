@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import anyio
+import msgspec
 
 if TYPE_CHECKING:
     from mujoco_sim.recording import Recorder
@@ -56,6 +57,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--scenario",
         default="kitting",
         help="kitting, meal, or a scenario file (default: %(default)s)",
+    )
+    p.add_argument(
+        "--ontology",
+        action="append",
+        default=[],
+        metavar="TTL",
+        help="teach the world model the terms of this Turtle file too (repeatable; "
+        "a scenario file can list its own under `ontology`)",
     )
     p.add_argument("--goal", help="goal facts instead of the scenario's, e.g. "
                    '"contain(KitBox-1, Gear-1) and contain(KitBox-2, Bolt-2)"')  # fmt: skip
@@ -127,6 +136,12 @@ def _setup(args: argparse.Namespace, data: Path) -> DemoSetup:
     from .sim import scenario_file
 
     scenario = load_scenario(scenario_file(args.scenario))
+    if args.ontology:  # the scenario's own terms, then these: all taught to the world model
+        for name in args.ontology:
+            if not Path(name).is_file():
+                raise ValueError(f"--ontology: no file {name}")
+        extra = [str(Path(n).resolve()) for n in args.ontology]
+        scenario = msgspec.structs.replace(scenario, ontology=[*scenario.ontology, *extra])
     goal = args.goal or mission_goal(scenario)
     if not goal:
         raise ValueError(f"scenario {scenario.name!r} has no goals; give --goal")

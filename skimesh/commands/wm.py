@@ -16,18 +16,19 @@ from typing import TYPE_CHECKING
 import anyio
 
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
-from wm_store.ontology import Ontology, core_ontology_path
+from wm_store.ontology import Ontology
 from wm_store.protocol import Transact
 from wm_store.rdf import import_turtle
 from wm_store.server import StoreConfig, WmStore, serve_store
 
 from ..runtime import run_service
+from ._connect import read_terms
 from ._wm_client import add_client_commands
 
 if TYPE_CHECKING:
     from scenario import Scenario
 
-__all__ = ["add_parser", "load_ontology"]
+__all__ = ["add_parser"]
 
 _log = logging.getLogger("skimesh.wm")
 
@@ -51,7 +52,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         default="group",
         help="group: group commit (default); fsync: one fsync per transaction; none: no fsync",
     )
-    p.add_argument("--ontology", action="append", metavar="TTL", help="extra ontology file(s)")
+    p.add_argument(
+        "--ontology",
+        action="append",
+        default=[],
+        metavar="TTL",
+        help="serving: teach the store the terms of this Turtle file at start (repeatable); "
+        "every process of the mesh then has them",
+    )
     initial = p.add_mutually_exclusive_group()
     initial.add_argument(
         "--scene", metavar="TTL", help="import this scene at start if the store is empty"
@@ -67,26 +75,24 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     add_client_commands(cmds)
 
 
-def load_ontology(extra: list[str] | None) -> Ontology:
-    """The core ontology, plus any extra Turtle files given on the command line."""
-    if not extra:
-        return Ontology.default()
-    return Ontology.load(core_ontology_path(), *(Path(f) for f in extra))
-
-
 def _serve(args: argparse.Namespace) -> int:
     if args.wm_command:  # a sub-command without its own func cannot happen; keep argparse honest
         raise SystemExit(f"unknown wm command {args.wm_command}")
     config = StoreConfig(data_dir=args.data, durability=args.durability)
-    ontology = load_ontology(args.ontology)
+    terms = read_terms(args.ontology)
     scene = Path(args.scene).read_text() if args.scene else None
     scenario = _read_scenario(args.scenario) if args.scenario else None
     mesh_config = mesh_config_from_args(args)
 
     async def main() -> int:
-        store = await WmStore.open(ontology, config)
+        store = await WmStore.open(Ontology.default(), config)
         if store.recovery_detail:
             _log.warning("recovery: %s", store.recovery_detail)
+        for name, text in terms:
+            before = store.revision
+            revision = await store.teach(text, name, author="wm --ontology")
+            said = "known already" if revision == before else f"taught at revision {revision}"
+            _log.info("ontology %s: %s", name, said)
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             await tg.start(serve_store, mesh, store)
             if scene is not None and not store.state.elements:
@@ -113,12 +119,15 @@ def _read_scenario(name: str) -> Scenario:
 
 async def _load_scenario(store: WmStore, scenario: Scenario) -> None:
     """``--scenario``: load the scenario's scene into the store, unless it is there already."""
-    from scenario.wm import scene_loaded, scene_ops
+    from scenario.wm import scenario_terms, scene_loaded, scene_ops
 
-    ops = scene_ops(scenario, store.state, store.ontology)
-    if not ops:
-        there = ", ".join(scene_loaded(scenario, store.state)[:3])
-        _log.warning("scenario %r: its scene is in the store already (%s)", scenario.name, there)
+    terms = await anyio.to_thread.run_sync(scenario_terms, scenario)
+    ops = scene_ops(scenario, store.state, store.ontology, terms=terms)
+    if there := scene_loaded(scenario, store.state):
+        if ops:  # its ontology terms, in case the files gained some since
+            await store.transact(Transact(ops=ops, author="scenario-import"))
+        shown = ", ".join(there[:3])
+        _log.warning("scenario %r: its scene is in the store already (%s)", scenario.name, shown)
         return
     reply = await store.transact(Transact(ops=ops, author="scenario-import"))
     _log.warning("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)

@@ -40,7 +40,7 @@ from meshlink import Mesh, MeshConfig, open_mesh, run_router
 from mujoco_sim import SimWorld, WorldOptions, sim_devices
 from mujoco_sim.recording import Recorder
 from scenario import Scenario
-from scenario.wm import scene_ops
+from scenario.wm import scenario_terms, scene_ops
 from skill_agent.runtime import AgentConfig, load_config
 from skill_agent.server import run_agent
 from wm_store import WmClient, ZenohTransport
@@ -209,7 +209,8 @@ async def demo_stack(
         wm = await stack.enter_async_context(WmClient.connect(ZenohTransport(mesh), author="demo"))
         if on_wm is not None:
             on_wm(wm)
-        reply = await wm.transact(scene_ops(scenario, wm.replica.state, wm.ontology))
+        terms = await anyio.to_thread.run_sync(scenario_terms, scenario)
+        reply = await wm.transact(scene_ops(scenario, wm.replica.state, wm.ontology, terms=terms))
         ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
         say(
             f"world model: {len(wm.replica.state.elements)} elements of scenario "

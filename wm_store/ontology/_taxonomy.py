@@ -21,7 +21,7 @@ from wm_store._errors import (
     UnknownRelationError,
 )
 from wm_store.ontology._terms import (
-    EXTEND_GUIDE,
+    WHERE_TERMS,
     ClassInfo,
     Declarations,
     RelationInfo,
@@ -100,10 +100,7 @@ class OntologyTaxonomy:
         self, name: str, lead: str = "unknown", pool: Iterable[str] | None = None
     ) -> UnknownClassError:
         hint = did_you_mean(name, self._ancestors if pool is None else pool)
-        return UnknownClassError(
-            f"{lead} class {name!r}{hint} Classes come from ontologies/*.ttl or "
-            f"define_class() ({EXTEND_GUIDE})"
-        )
+        return UnknownClassError(f"{lead} class {name!r}{hint} {WHERE_TERMS}")
 
     @property
     def classes(self) -> frozenset[str]:

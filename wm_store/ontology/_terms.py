@@ -81,6 +81,12 @@ CLASS_NAME_RE: Final = re.compile(r"[A-Z][A-Za-z0-9_]*")  # no '-': element ids 
 TEMPLATE_NAME_RE: Final = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
 
 EXTEND_GUIDE: Final = "docs/guides/extend-the-ontology.md"
+WHERE_TERMS: Final = (
+    "The world model's ontology is its core plus what was taught: files given to "
+    "`skimesh wm --ontology`, a scenario's `ontology` files, agents' and skills' `ontology` "
+    f"files, and `skimesh wm teach` / `define-class` / `define-property` ({EXTEND_GUIDE})"
+)
+"""Where terms come from, for the errors about an unknown one."""
 """Where error messages send a reader who has to change the ontology."""
 
 # --------------------------------------------------------------------------- names in messages

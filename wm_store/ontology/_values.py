@@ -24,9 +24,9 @@ from wm_store._errors import (
 from wm_store.ontology._cardinality import OntologyCardinality
 from wm_store.ontology._literals import kind_of, typed_problem
 from wm_store.ontology._terms import (
-    EXTEND_GUIDE,
     SCALAR_KINDS,
     TYPED_KINDS,
+    WHERE_TERMS,
     DataPropertyInfo,
     Declarations,
     did_you_mean,
@@ -79,7 +79,7 @@ class OntologyValues(OntologyCardinality):
         except KeyError:
             hint = did_you_mean(name, self._decl.data_properties)
             raise UnknownPropertyError(
-                f"unknown data property {name!r}{hint} Declare it in the ontology ({EXTEND_GUIDE})"
+                f"unknown data property {name!r}{hint} {WHERE_TERMS}"
             ) from None
 
     def check_value(self, name: str, value: Value) -> None:
