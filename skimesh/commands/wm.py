@@ -88,13 +88,13 @@ def _serve(args: argparse.Namespace) -> int:
         store = await WmStore.open(Ontology.default(), config)
         if store.recovery_detail:
             _log.warning("recovery: %s", store.recovery_detail)
-        for name, text in terms:
-            before = store.revision
-            revision = await store.teach(text, name, author="wm --ontology")
-            said = "known already" if revision == before else f"taught at revision {revision}"
-            _log.info("ontology %s: %s", name, said)
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             await tg.start(serve_store, mesh, store)
+            for name, text in terms:
+                before = store.revision
+                revision = await store.teach(text, name, author="wm --ontology")
+                said = "known already" if revision == before else f"taught at revision {revision}"
+                _log.info("ontology %s: %s", name, said)
             if scene is not None and not store.state.elements:
                 ops = import_turtle(scene, store.ontology, state=store.state)
                 await store.transact(Transact(ops=ops, author="scene-import"))

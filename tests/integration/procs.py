@@ -25,9 +25,11 @@ WORKER = Path(__file__).with_name("wm_worker.py")
 class Child:
     """A child process whose stdout and stderr lines are read by background threads."""
 
-    def __init__(self, args: Sequence[str], *, name: str) -> None:
+    def __init__(
+        self, args: Sequence[str], *, name: str, env: dict[str, str] | None = None
+    ) -> None:
         self.name = name
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        env = dict(env or os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen(
             [sys.executable, *args],
             cwd=ROOT,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from .procs import ROOT, start_store
+from .procs import ROOT, Child, start_store
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow]
 
@@ -176,3 +176,80 @@ def test_no_store_fails_fast_with_advice(router_endpoint: str, mesh_name: str) -
     )
     assert result.returncode != 0
     assert "skimesh wm" in result.stderr
+
+
+BEARINGS = """\
+@prefix skm:  <https://skimesh.dev/ontology#> .
+@prefix owl:  <http://www.w3.org/2002/07/owl#> .
+@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .
+
+skm:Bearing a owl:Class ; rdfs:subClassOf skm:Part ; rdfs:label "bearing"@en .
+"""
+
+PULLEY_SCENE = """\
+@prefix skm:  <https://skimesh.dev/ontology#> .
+@prefix skms: <https://skimesh.dev/scene#> .
+
+skms:p1 a skm:Pulley ; skm:inspected true ; skm:heldBy skms:b1 .
+skms:b1 a skm:Bearing .
+"""
+
+
+def test_the_store_teaches_the_whole_mesh(
+    router_endpoint: str, mesh_name: str, tmp_path: Path
+) -> None:
+    """A store started with --ontology; clients with no ontology of their own use its terms,
+    teach more, and an export re-imports whole into a new store."""
+    ext = tmp_path / "bearings.ttl"
+    ext.write_text(BEARINGS)
+    common = ["--connect", router_endpoint, "--mesh", mesh_name]
+    store = Child(
+        ["-m", "skimesh", "wm", *common, "--data", str(tmp_path / "wm"), "--ontology", str(ext)],
+        name="store",
+    )
+    try:
+        store.wait_stderr("world model ready")
+        assert skimesh("wm", *common, "ls", "Bearing").returncode == 1, "known class, no element"
+        refused = skimesh("wm", *common, "--ontology", str(ext), "ls", "Bearing")
+        assert refused.returncode != 0 and "wm teach" in refused.stderr
+
+        steps = [
+            ("define-class", "Pulley", "--parent", "Part", "--comment", "a wheel for a belt"),
+            ("define-property", "inspected", "--kind", "bool", "--domain", "Part"),
+            ("define-relation", "heldBy", "--domain", "Pulley", "--range", "Bearing"),
+        ]
+        for step in steps:
+            done = skimesh("wm", *common, *step)
+            assert done.returncode == 0 and "taught at revision" in done.stdout, done.stderr
+        again = skimesh("wm", *common, "teach", str(ext))
+        assert again.returncode == 0 and "known already" in again.stdout, again.stderr
+        bad = tmp_path / "bad.ttl"
+        bad.write_text("skm:Broken a")
+        refused = skimesh("wm", *common, "teach", str(bad))
+        assert refused.returncode != 0 and "bad.ttl" in refused.stderr
+
+        scene = tmp_path / "pulleys.ttl"
+        scene.write_text(PULLEY_SCENE)
+        imported = skimesh("wm", *common, "import", str(scene))
+        assert imported.returncode == 0, imported.stderr
+        taught = skimesh("wm", *common, "ontology", "--taught")
+        assert "# ---- taught: bearings.ttl" in taught.stdout, taught.stdout
+        assert "skm:heldBy" in taught.stdout and "class Pulley" in taught.stdout
+        whole = skimesh("wm", *common, "ontology")
+        assert "skm:Bearing" in whole.stdout and "skm:MobileManipulator" in whole.stdout
+        export = tmp_path / "site.ttl"
+        assert skimesh("wm", *common, "export", str(export)).returncode == 0
+    finally:
+        assert store.stop() == 0, store.log()
+
+    # A new store, core ontology only: the export brings its terms along.
+    fresh = start_store(router_endpoint, f"{mesh_name}-b", tmp_path / "wm2")
+    other = ["--connect", router_endpoint, "--mesh", f"{mesh_name}-b"]
+    try:
+        imported = skimesh("wm", *other, "import", str(export))
+        assert imported.returncode == 0, imported.stderr
+        listed = json.loads(skimesh("wm", *other, "query", "Pulley", "--json").stdout)
+        assert [p["properties"]["inspected"] for p in listed] == [True]
+        assert skimesh("wm", *other, "ls", "Bearing").returncode == 0
+    finally:
+        assert fresh.stop() == 0, fresh.log()
