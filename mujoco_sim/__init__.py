@@ -29,6 +29,7 @@ from ._snapshot import ObjectInfo as ObjectInfo
 from ._snapshot import SceneFacts as SceneFacts
 from ._snapshot import Snapshot as Snapshot
 from ._snapshot import object_in as object_in
+from ._truth import SimTruth as SimTruth
 from ._world import SimWorld as SimWorld
 from ._world import WorldOptions as WorldOptions
 from ._world import WorldStatistics as WorldStatistics
@@ -47,6 +48,7 @@ __all__ = [
     "SimBase",
     "SimGripper",
     "SimSensor",
+    "SimTruth",
     "SimWorld",
     "Snapshot",
     "WorldIK",
