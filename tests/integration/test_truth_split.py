@@ -29,12 +29,13 @@ from typing import Any
 import anyio
 import anyio.from_thread
 import pytest
+from hypothesis import HealthCheck, given, settings
 
 from device_drivers import truth as t
 from device_drivers.truth import serve_truth, truth_key
 from meshlink import Mesh, MeshConfig, open_mesh
 from meshlink.rpc import DEFAULT_MAX_REQUEST_BYTES, Decoder, ErrorReply, WireError, encode
-from meshlink.testing import check_reply, fuzz_queryable, hostile_payloads
+from meshlink.testing import check_reply, fuzz_queryable, hostile_payloads, payloads
 from mujoco_sim import SimTruth, WorldOptions, running_world
 from scenario import load_scenario
 from scenario.wm import scenario_ops
@@ -49,7 +50,7 @@ from wm_store.server import StoreConfig, WmStore, serve_store
 
 from .procs import ROOT
 
-pytestmark = [pytest.mark.zenoh, pytest.mark.sim]
+pytestmark = [pytest.mark.zenoh, pytest.mark.sim, pytest.mark.slow]
 
 MEAL = ROOT / "configs" / "scenarios" / "meal" / "scenario.toml"
 HOLDS = "doorOpen(Microwave-1) = false and contain(Worktop-1, MealBox-1)"
@@ -253,9 +254,9 @@ def _refusal(requests: Decoder[Any], payload: bytes) -> str | None:
 
 
 def test_hostile_payloads_to_the_ground_truth_get_error_replies(site: Site) -> None:
-    """``sim/truth`` attacked over Zenoh: every reply decodes as an ``ErrorReply`` or a
-    ``TruthReply``, and a payload that is no request gets ``bad_request`` (``too_large`` over
-    the limit)."""
+    """``sim/truth`` attacked over Zenoh with the fixed hostile payloads, then a bounded
+    hypothesis variant: every reply decodes as an ``ErrorReply`` or a ``TruthReply``, and a
+    payload that is no request gets ``bad_request`` (``too_large`` over the limit)."""
     key = truth_key(site.client.keys)
     samples = (
         encode(t.SimClock()),
@@ -273,4 +274,20 @@ def test_hostile_payloads_to_the_ground_truth_get_error_replies(site: Site) -> N
         if want is not None:
             assert isinstance(reply, ErrorReply) and reply.code == want, (payload[:40], reply)
     count = site.portal.call(fuzz_queryable, site.client, key, replies, samples)
-    assert count == len(samples)
+    assert count == len(samples), "each valid request gets one answer"
+
+    @settings(
+        max_examples=60,
+        deadline=None,
+        suppress_health_check=list(HealthCheck),
+        database=None,
+        derandomize=True,
+    )
+    @given(payload=payloads(samples))
+    def check(payload: bytes) -> None:
+        (answer,) = site.portal.call(partial(site.client.get, key, payload, timeout=10.0))
+        reply = check_reply(answer.payload, answer.ok, replies)
+        want = _refusal(requests, payload)
+        assert want is None or (isinstance(reply, ErrorReply) and reply.code == want), reply
+
+    check()
