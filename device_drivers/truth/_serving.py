@@ -104,8 +104,8 @@ class TruthClient:
             payload = await self._mesh.request(self._key, encode(request), timeout=wait)
         except RemoteError as exc:
             raise p.error_from_reply(exc.payload) from None
-        except NoReplyError as exc:
-            raise DeviceUnavailableError(f"no simulator on the mesh: {exc}") from None
+        except NoReplyError:
+            raise DeviceUnavailableError(f"no reply on {self._key} within {wait:g} s") from None
         try:
             return decode_truth_reply(payload)
         except WireError as exc:
