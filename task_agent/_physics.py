@@ -116,7 +116,7 @@ class _Asker:
                     actual = state.heating
                     text = f"heater {'on' if actual else 'off'}"
                 return (actual == lit.value) == lit.holds, text
-        return None, "cannot tell: the simulation has no such fact (world model only)"
+        return None, "cannot tell: the simulation has no such fact; a world-model fact only"
 
 
 async def check_goal_facts(
