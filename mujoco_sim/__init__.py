@@ -2,10 +2,11 @@
 
 :class:`SimWorld` runs a scenario's world in a thread beside the event loop (real-time or
 fast pacing); :func:`sim_devices` gives in-process drivers that implement the
-:mod:`device_drivers` interfaces over it. The sub-packages hold the concepts: ``models``
-(MuJoCo model building), ``control`` (controllers of each device), ``ik`` and ``placo_ik``
-(inverse kinematics), ``motion`` (trajectories and paths), ``physics`` (state, options,
-health) and ``recording`` (rerun).
+:mod:`device_drivers` interfaces over it, and :class:`SimTruth` its ground truth (where the
+objects really are: :class:`device_drivers.truth.GroundTruth`, served on ``sim/truth``). The
+sub-packages hold the concepts: ``models`` (MuJoCo model building), ``control``
+(controllers of each device), ``ik`` and ``placo_ik`` (inverse kinematics), ``motion``
+(trajectories and paths), ``physics`` (state, options, health) and ``recording`` (rerun).
 
 This is the only package that imports ``mujoco`` or ``placo``.
 """
