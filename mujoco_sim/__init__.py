@@ -2,10 +2,11 @@
 
 :class:`SimWorld` runs a scenario's world in a thread beside the event loop (real-time or
 fast pacing); :func:`sim_devices` gives in-process drivers that implement the
-:mod:`device_drivers` interfaces over it. The sub-packages hold the concepts: ``models``
-(MuJoCo model building), ``control`` (controllers of each device), ``ik`` and ``placo_ik``
-(inverse kinematics), ``motion`` (trajectories and paths), ``physics`` (state, options,
-health) and ``recording`` (rerun).
+:mod:`device_drivers` interfaces over it, and :class:`SimTruth` its ground truth (where the
+objects really are: :class:`device_drivers.truth.GroundTruth`, served on ``sim/truth``). The
+sub-packages hold the concepts: ``models`` (MuJoCo model building), ``control``
+(controllers of each device), ``ik`` and ``placo_ik`` (inverse kinematics), ``motion``
+(trajectories and paths), ``physics`` (state, options, health) and ``recording`` (rerun).
 
 This is the only package that imports ``mujoco`` or ``placo``.
 """
@@ -29,6 +30,7 @@ from ._snapshot import ObjectInfo as ObjectInfo
 from ._snapshot import SceneFacts as SceneFacts
 from ._snapshot import Snapshot as Snapshot
 from ._snapshot import object_in as object_in
+from ._truth import SimTruth as SimTruth
 from ._world import SimWorld as SimWorld
 from ._world import WorldOptions as WorldOptions
 from ._world import WorldStatistics as WorldStatistics
@@ -47,6 +49,7 @@ __all__ = [
     "SimBase",
     "SimGripper",
     "SimSensor",
+    "SimTruth",
     "SimWorld",
     "Snapshot",
     "WorldIK",

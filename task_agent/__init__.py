@@ -1,7 +1,8 @@
 """skimesh task layer: discovery, planning, multi-robot execution, verification.
 
-Here: the goals (:func:`parse_goal`, :class:`Goal`), the error tree (:class:`TaskError`) and
-the client of the task agent (:class:`TaskClient`, :class:`OperatorClient`). The concepts, each
+Here: the goals (:func:`parse_goal`, :class:`Goal`), each goal fact checked in the world model
+and the physics (:func:`check_goal_facts`), the error tree (:class:`TaskError`) and the client
+of the task agent (:class:`TaskClient`, :class:`OperatorClient`). The concepts, each
 a sub-package whose ``__init__`` is the public path of its names::
 
     discovery       the agents, robots, devices and skills: registrations + liveliness
@@ -54,8 +55,12 @@ if TYPE_CHECKING:
     from ._client import OperatorClient as OperatorClient
     from ._client import TaskClient as TaskClient
     from ._client import new_task_id as new_task_id
+    from ._physics import NO_SIMULATOR as NO_SIMULATOR
+    from ._physics import check_goal_facts as check_goal_facts
 
 _LAZY = {
+    "NO_SIMULATOR": "_physics",
+    "check_goal_facts": "_physics",
     "OperatorClient": "_client",
     "TaskClient": "_client",
     "new_task_id": "_client",
@@ -72,6 +77,7 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "NO_SIMULATOR",
     "DiscoveryError",
     "DomainError",
     "FileRefusedError",
@@ -92,6 +98,7 @@ __all__ = [
     "UnsolvableError",
     "VerificationError",
     "check_goal",
+    "check_goal_facts",
     "goal_from_conditions",
     "literal_atom",
     "new_task_id",

@@ -250,6 +250,7 @@ class TaskClient:
             steps_run=info.steps_run,
             replans=info.replans,
             duration=info.finished_at - info.started_at,
+            check=info.check,
         )
 
     async def run_goal(

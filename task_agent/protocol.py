@@ -28,6 +28,8 @@ __all__ = [
     "AbortTask",
     "AnswerPending",
     "Call",
+    "FactCheck",
+    "GoalCheck",
     "ListPending",
     "ListTasks",
     "OkReply",
@@ -273,6 +275,46 @@ class Replanning(Struct, tag=True, tag_field="event", frozen=True, kw_only=True)
     """Why: the failed step's reason, or the agent that vanished."""
 
 
+class FactCheck(Struct, frozen=True):
+    """One goal fact after the task: in the world model, and in the physics if a simulator
+    can tell."""
+
+    fact: str
+    """The goal literal, with labels: ``contain(KitBox-1, Gear-1)``, ``doorOpen(M-1) = false``."""
+    in_wm: bool
+    physics: bool | None = None
+    """True: the physics agrees; False: it contradicts the fact; None: it cannot tell."""
+    detail: str = ""
+    """What the physics showed, or why it cannot tell."""
+
+    @property
+    def holds(self) -> bool:
+        """In the world model, and not contradicted by the physics."""
+        return self.in_wm and self.physics is not False
+
+
+class GoalCheck(Struct, frozen=True, kw_only=True):
+    """Every goal fact of a succeeded goal task, checked once the plan ran."""
+
+    facts: list[FactCheck] = []
+    simulator: bool = False
+    """A simulator answered (``sim/truth``); else the facts were checked in the world model only."""
+    sim_time: float | None = None
+    """Simulated time, s, at the check (with a simulator)."""
+    note: str = ""
+    """Why the physics was not asked (``no simulator on the mesh: ...``), or what it said."""
+
+    @property
+    def holds(self) -> bool:
+        """Every fact holds in the world model and none is contradicted by the physics."""
+        return bool(self.facts) and all(f.holds for f in self.facts)
+
+    @property
+    def contradicted(self) -> list[FactCheck]:
+        """The facts the world model holds but the physics contradicts."""
+        return [f for f in self.facts if f.in_wm and f.physics is False]
+
+
 class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     task_id: str
     seq: int
@@ -282,6 +324,8 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     steps_run: int = 0
     replans: int = 0
     duration: float = 0.0
+    check: GoalCheck | None = None
+    """A succeeded goal task: each goal fact in the world model and in the physics."""
 
 
 TaskEvent: TypeAlias = (
@@ -301,6 +345,8 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     replans: int = 0
     steps_run: int = 0
     message: str = ""
+    check: GoalCheck | None = None
+    """As in :class:`TaskFinished`, once the task has ended."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

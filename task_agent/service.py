@@ -29,6 +29,10 @@ task id that is no key segment, operator fallback for a skill no registered agen
 ``task_exists``, ``unknown_task``, ``goal_parse``, ``verification``. Nothing malformed crashes
 the service or changes its state. Nothing blocks the loop: planning solves in a worker thread
 (the planner's limiter).
+
+A goal task that succeeded is checked fact by fact before it ends (``TaskFinished.check``,
+``TaskInfo.check``): in the world model, and in the physics when a simulator answers on
+``sim/truth`` (:func:`mesh_verifier`; the check says so when none does).
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ from collections.abc import Awaitable, Callable
 import anyio
 from anyio.abc import TaskGroup, TaskStatus
 
+from device_drivers.truth import TruthClient
 from meshlink import Mesh, MeshlinkError, check_name
 from meshlink.rpc import (
     BAD_REQUEST,
@@ -56,12 +61,22 @@ from wm_store import WmClient
 
 from ._errors import RequestError, TaskError, VerificationError
 from ._goal_text import parse_goal
-from ._goals import check_goal
+from ._goals import Goal, check_goal
+from ._physics import NO_SIMULATOR, check_goal_facts
 from .discovery import Discovery
-from .execution import Executor, PlanSource, RunWrites, SkillRunner, WorldModel, ZenohRunner
+from .execution import (
+    Executor,
+    GoalVerifier,
+    PlanSource,
+    RunWrites,
+    SkillRunner,
+    WorldModel,
+    ZenohRunner,
+)
 from .operator import serve_operator
 from .protocol import (
     AbortTask,
+    GoalCheck,
     ListTasks,
     OkReply,
     SubmitFile,
@@ -84,7 +99,7 @@ from .protocol import (
 from .taskfile import load_task_file
 from .verification import verify
 
-__all__ = ["TaskService", "serve_tasks"]
+__all__ = ["TaskService", "mesh_verifier", "serve_tasks"]
 
 _log = logging.getLogger(__name__)
 PlannerFactory = Callable[[TaskOptions], PlanSource]
@@ -114,6 +129,22 @@ def default_planners() -> PlannerFactory:
     return lambda options: make(options.engine, options.planner_timeout)
 
 
+def mesh_verifier(mesh: Mesh, wm: WorldModel, *, find_timeout: float = 2.0) -> GoalVerifier:
+    """Checks a goal's facts in ``wm`` and, if a simulator answers on ``mesh`` within
+    ``find_timeout`` s, in its physics (asked anew for every task: simulators come and go)."""
+
+    async def verify(goal: Goal) -> GoalCheck:
+        truth, why = await TruthClient.find(mesh, timeout=find_timeout)
+        note = "" if truth is not None else f"{NO_SIMULATOR} ({why})"
+        return await check_goal_facts(goal, wm, truth, note=note)
+
+    return verify
+
+
+async def _world_model_only(wm: WorldModel, goal: Goal) -> GoalCheck:
+    return await check_goal_facts(goal, wm, None)
+
+
 class TaskService:
     """Runs tasks and answers requests about them (see the module doc). Start :meth:`run` in a
     task group before calling :meth:`handle`."""
@@ -131,8 +162,11 @@ class TaskService:
         abort_wait: float = 10.0,
         writes: RunWrites | None = None,
         max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
+        verify: GoalVerifier | None = None,
     ) -> None:
         self.wm = wm
+        self.verify = verify or functools.partial(_world_model_only, wm)
+        """Checks a succeeded goal fact by fact (default: in the world model only)."""
         self.writes = writes
         """The agents' event logs (steps then report their world-model writes), if followed."""
         self.discovery = discovery
@@ -235,6 +269,7 @@ class TaskService:
             options=options,
             planner=self.planners(options),
             operator_agent=self.operator_agent,
+            verify=self.verify,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:
@@ -302,6 +337,7 @@ async def serve_tasks(
         planners=planners,
         operator_agent=operator or "",
         writes=writes,
+        verify=mesh_verifier(mesh, wm),
     )
 
     async with anyio.create_task_group() as tg:

@@ -1,5 +1,6 @@
 """What ``skimesh task`` prints: one line per task event with a summary per robot
-(:class:`ProgressPrinter`), a task's state, verification problems, JSON lines."""
+(:class:`ProgressPrinter`), a task's state, each goal fact checked in the world model and the
+physics (:func:`check_lines`), verification problems, JSON lines."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import time
 import msgspec
 
 from task_agent.protocol import (
+    GoalCheck,
     Planned,
     Replanning,
     StepFinished,
@@ -21,7 +23,14 @@ from task_agent.protocol import (
     VerifyProblem,
 )
 
-__all__ = ["ProgressPrinter", "info_lines", "print_json", "print_problems", "step_line"]
+__all__ = [
+    "ProgressPrinter",
+    "check_lines",
+    "info_lines",
+    "print_json",
+    "print_problems",
+    "step_line",
+]
 
 
 def print_json(obj: object) -> None:
@@ -99,7 +108,7 @@ class ProgressPrinter:
             lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
         if event.message:
             lines.append(f"  {event.message}")
-        return lines
+        return lines + check_lines(event.check)
 
 
 def step_line(at: str, agent: str, step: int, skill: str, text: str) -> str:
@@ -113,7 +122,35 @@ def info_lines(info: TaskInfo) -> list[str]:
         f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
         f"{info.replans} replans",
         *([f"  {info.message}"] if info.message else []),
+        *check_lines(info.check),
     ]
+
+
+def _physics(physics: bool | None, detail: str) -> tuple[str, str]:
+    if physics is None:
+        why = detail.removeprefix("cannot tell: ") or "no such fact"
+        return "cannot tell", f"({why})"
+    return ("yes" if physics else "NO"), detail
+
+
+def check_lines(check: GoalCheck | None) -> list[str]:
+    """Each goal fact: whether the world model holds it and whether the physics agrees
+    (``yes``, ``NO``, ``cannot tell (why)``), with the simulated time of the check."""
+    if check is None:
+        return []
+    at = f" at simulated time {check.sim_time:.2f} s" if check.sim_time is not None else ""
+    where = "world model and physics" if check.simulator else "world model"
+    lines = [f"  goal check ({where}{at}):"]
+    for f in check.facts:
+        physics, detail = _physics(f.physics, f.detail)
+        wm = "yes" if f.in_wm else "NO"
+        lines.append(f"    {f.fact:<36} world model {wm:<3}  physics {physics:<11}  {detail}")
+    if check.note:
+        lines.append(f"  {check.note}")
+    if wrong := check.contradicted:
+        facts = ", ".join(f.fact for f in wrong)
+        lines.append(f"  THE PHYSICS CONTRADICTS THE WORLD MODEL: {facts}")
+    return lines
 
 
 def print_problems(problems: list[VerifyProblem]) -> None:

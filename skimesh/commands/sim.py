@@ -1,7 +1,9 @@
 """``skimesh sim --scenario S``: a scenario's MuJoCo world, its devices served on the mesh.
 
 Opens a Zenoh session (client of a router by default), builds the world, steps it in real
-time (or ``--fast``), serves every device on ``devices/<owner>/<device>/{cmd,state}``, records
+time (or ``--fast``), serves every device on ``devices/<owner>/<device>/{cmd,state}`` and the
+world's ground truth on ``sim/truth`` (:mod:`device_drivers.truth`: where the objects really
+are, appliance states, the simulated time; what the task agent checks goals against), records
 the run with rerun (``--rerun FILE``, default ``sim.rrd``; ``--no-rerun``; ``--rerun-connect
 URL`` streams to a viewer), and stops cleanly on SIGINT/SIGTERM, on ``--duration`` simulated
 seconds, or when the simulation diverges (exit code 1).
@@ -32,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "sim",
         help="simulate a scenario's world and serve its devices on the mesh",
         description="Build the MuJoCo world of a scenario, step it and serve every robot's "
-        "devices on devices/<robot>/<device>/{cmd,state}.",
+        "devices on devices/<robot>/<device>/{cmd,state} and its ground truth on sim/truth.",
     )
     add_mesh_arguments(p)
     p.add_argument(
@@ -66,7 +68,8 @@ def _run(args: argparse.Namespace) -> int:
         os.environ.setdefault("MUJOCO_GL", "egl")
         os.environ.setdefault("EGL_PLATFORM", "surfaceless")
     from device_drivers.remote import serve_devices
-    from mujoco_sim import SimWorld, WorldOptions, sim_devices
+    from device_drivers.truth import serve_truth
+    from mujoco_sim import SimTruth, SimWorld, WorldOptions, sim_devices
     from mujoco_sim.recording import Recorder
     from scenario import load_scenario
 
@@ -88,6 +91,7 @@ def _run(args: argparse.Namespace) -> int:
                     await tg.start(world.run)
                     serve = partial(serve_devices, state_rate=args.state_rate)
                     await tg.start(serve, mesh, devices)
+                    await tg.start(serve_truth, mesh, SimTruth(world))
                     names = ", ".join(f"{o}/{d}" for o, d in devices)
                     _log.warning(
                         "sim: scenario %s (%s), serving %s on mesh %s",

@@ -7,10 +7,16 @@ summary (outcome, steps, replans, busy time per robot); ``--json`` prints every 
 JSON line instead. Ctrl-C (or SIGTERM) aborts the task (every run is stopped and its robot
 brought to a safe state) before the command exits.
 
-Exit codes of ``submit`` and ``watch``: 0 succeeded, 1 failed, 2 unsolvable, 3 aborted,
-4 usage or other errors (bad goal, a task file that does not verify, no task agent); 130
-interrupted (the task was aborted). ``verify``: 0 verifies, 1 problems, 4 errors. ``abort``:
-0 the task has ended, 4 errors (or still running after the service's wait). ``status``,
+A goal task that succeeded is checked fact by fact by the task agent (in the world model and,
+when ``skimesh sim`` runs on the mesh, in the physics, with the simulated time of the check);
+``submit``, ``watch`` and ``status`` print each fact's verdicts.
+
+Exit codes of ``submit`` and ``watch``: 0 succeeded (and no goal fact contradicted by the
+physics), 1 failed, 2 unsolvable, 3 aborted, 4 usage or other errors (bad goal, a task file
+that does not verify, no task agent), 5 succeeded in the world model but the physics
+contradicts a goal fact; 130 interrupted (the task was aborted). ``verify``: 0 verifies,
+1 problems, 4 errors. ``abort``: 0 the task has ended, 4 errors (or still running after the
+service's wait). ``status`` exits 0 whatever the task's state. ``status``,
 ``list`` and ``abort`` print JSON with ``--json`` (``abort``: the task's state plus the
 service's ``reply``).
 """
@@ -46,7 +52,7 @@ __all__ = ["EXIT_CODES", "add_parser"]
 
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
 EXIT_CODES = {"succeeded": 0, "failed": 1, "unsolvable": 2, "aborted": 3}
-EXIT_ERROR, EXIT_INTERRUPTED = 4, 130
+EXIT_ERROR, EXIT_CONTRADICTED, EXIT_INTERRUPTED = 4, 5, 130
 
 
 class _Parser(argparse.ArgumentParser):
@@ -95,8 +101,10 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     submit = cmds.add_parser(
         "submit",
         help="submit a goal or a task file and follow it to its end",
-        description="Exit codes: 0 succeeded, 1 failed, 2 unsolvable, 3 aborted, 4 usage or "
-        "other errors, 130 interrupted (the task is aborted first).",
+        description="A succeeded goal is checked fact by fact in the world model and, when a "
+        "simulator runs on the mesh, in the physics. Exit codes: 0 succeeded, 1 failed, "
+        "2 unsolvable, 3 aborted, 4 usage or other errors, 5 succeeded in the world model but "
+        "contradicted by the physics, 130 interrupted (the task is aborted first).",
     )
     what = submit.add_mutually_exclusive_group(required=True)
     what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
@@ -345,6 +353,8 @@ async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) ->
         if not (args.no_progress and isinstance(event, StepProgress)):
             show(event)
         if isinstance(event, TaskFinished):
+            if event.check is not None and event.check.contradicted:
+                return EXIT_CONTRADICTED
             return EXIT_CODES.get(event.outcome, EXIT_ERROR)
     return EXIT_ERROR  # pragma: no cover - the stream ends with TaskFinished
 

@@ -5,8 +5,8 @@
 - :func:`run_mission` submits the goal, follows its events and verifies it
   (:class:`MissionResult`, :func:`summary_lines`);
 - :class:`MissionView` prints the events and keeps the summary's figures;
-- :func:`verify_goal` checks every goal fact in the world model and in the physics
-  (:class:`FactCheck`, :func:`goal_holds`);
+- :func:`verify_goal` checks every goal fact in the world model and in the physics of its
+  world (:func:`task_agent.check_goal_facts`, :func:`goal_holds`);
 - :func:`run_demo` is one whole run (:class:`DemoSetup`: what is read before the loop starts),
   returning the exit code.
 
@@ -14,7 +14,6 @@ The command (:mod:`skimesh.commands.demo`) parses the arguments, owns the record
 the signals; the recording is :mod:`skimesh.recording`. Errors: :class:`skimesh.errors.DemoError`.
 """
 
-from ._check import FactCheck as FactCheck
 from ._check import goal_holds as goal_holds
 from ._check import verify_goal as verify_goal
 from ._mission import MissionResult as MissionResult
@@ -37,7 +36,6 @@ __all__ = [
     "EXIT_NOT_REACHED",
     "EXIT_SETUP",
     "DemoSetup",
-    "FactCheck",
     "MissionResult",
     "MissionView",
     "RobotStats",

@@ -6,7 +6,8 @@
       ^ every component below is a Zenoh client of it, with its own session
       |-- world-model store   durable log + snapshots in the data directory
       |-- demo client         loads the scenario's scene (ONE transaction), watches changes
-      |-- MuJoCo world        SimWorld (fast or real time) + rerun Recorder; in-process drivers
+      |-- MuJoCo world        SimWorld (fast or real time) + rerun Recorder; in-process drivers;
+      |                       its ground truth served on sim/truth (as ``skimesh sim`` does)
       |-- skill agents        one per robot / appliance the scenario names (run_agent), devices
       |                       bound by label to the world's drivers
       '-- task agent          discovery, planning, execution (serve_tasks)
@@ -36,8 +37,9 @@ from typing import Any
 import anyio
 from anyio.abc import TaskStatus
 
+from device_drivers.truth import serve_truth
 from meshlink import Mesh, MeshConfig, open_mesh, run_router
-from mujoco_sim import SimWorld, WorldOptions, sim_devices
+from mujoco_sim import SimTruth, SimWorld, WorldOptions, sim_devices
 from mujoco_sim.recording import Recorder
 from scenario import Scenario
 from scenario.wm import scenario_terms, scene_ops
@@ -224,6 +226,7 @@ async def demo_stack(
         )
         go = anyio.Event()
         await stack.enter_async_context(background(_world, world, go))
+        await stack.enter_async_context(background(serve_truth, server_mesh, SimTruth(world)))
         drivers: dict[str, object] = {d.name: d for d in sim_devices(world).values()}
         pace = "as fast as possible" if options.fast else "in real time"
         say(f"MuJoCo world: {len(drivers)} devices, stepping {pace}")

@@ -20,6 +20,7 @@ sub-package imports unified-planning.
 
 from ._executor import EXCLUDED_REASONS as EXCLUDED_REASONS
 from ._executor import Executor as Executor
+from ._executor import GoalVerifier as GoalVerifier
 from ._executor import PlanSource as PlanSource
 from ._run_writes import RunWrites as RunWrites
 from ._run_writes import WatchedRun as WatchedRun
@@ -48,6 +49,7 @@ __all__ = [
     "CoreRunner",
     "EventSink",
     "Executor",
+    "GoalVerifier",
     "OnEvent",
     "OnStarted",
     "PlanSource",

@@ -10,7 +10,11 @@ with the agents still there, at most ``TaskOptions.max_replans`` times; an agent
 failed on its own (``execution``, ``error``, ``timeout``) is left out of later plans of the task
 unless no plan exists without it. When every step succeeded the goal is checked in the world
 model: if it does not hold, that is a failure too. Each reason is published in a
-``Replanning`` event and listed in the final message.
+``Replanning`` event and listed in the final message. A goal that holds is then checked fact by
+fact (``verify``: in the world model and, where a simulator runs, in the physics; see
+:mod:`task_agent._physics`), and the result travels in ``TaskFinished.check`` and
+``TaskInfo.check``; the outcome stays ``succeeded`` (the plan ran and the world model holds the
+goal), and the clients judge a contradicting physics.
 
 A **task file** (hand-written sequence / parallel blocks, verified by the service before it gets
 here) runs as written; a failed step fails the task (there is no goal to plan towards), unless
@@ -39,6 +43,7 @@ from .._goals import Goal
 from ..discovery import AgentInfo, Discovery
 from ..planning import Plan, to_partial_order
 from ..protocol import (
+    GoalCheck,
     Planned,
     Replanning,
     TaskEvent,
@@ -61,13 +66,17 @@ from ._state import (
 )
 from ._steps import EventSink, StepOutcome, StepScheduler
 
-__all__ = ["EXCLUDED_REASONS", "Executor", "PlanSource"]
+__all__ = ["EXCLUDED_REASONS", "Executor", "GoalVerifier", "PlanSource"]
 
 _log = logging.getLogger(__name__)
 
 EXCLUDED_REASONS = frozenset({"execution", "error", "timeout"})
 """Failures that say the agent's skill itself failed (not the world model): that skill of
 that agent is left out of the task's later plans."""
+
+
+GoalVerifier = Callable[[Goal], Awaitable[GoalCheck]]
+"""Checks a goal that holds in the world model, fact by fact (world model and physics)."""
 
 
 class PlanSource(Protocol):
@@ -97,8 +106,12 @@ class Executor:
         wm_timeout: float = 5.0,
         agent_wait: float = 5.0,
         writes: RunWrites | None = None,
+        verify: GoalVerifier | None = None,
     ) -> None:
         self.task_id = task_id
+        self.verify = verify
+        self.check: GoalCheck | None = None
+        """The goal's facts checked after success (``verify``), once there."""
         self.wm = wm
         self.discovery = discovery
         self.options = options or TaskOptions()
@@ -152,6 +165,7 @@ class Executor:
             replans=self.replans,
             steps_run=self.steps.steps_run,
             message=self.message,
+            check=self.check,
         )
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
@@ -196,6 +210,7 @@ class Executor:
             steps_run=self.steps.steps_run,
             replans=self.replans,
             duration=self.finished_at - self.started_at,
+            check=self.check,
         )
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
@@ -217,6 +232,7 @@ class Executor:
                 await self._catch_up()
                 unmet = unmet_goal(goal, self.wm)
                 if not unmet:
+                    await self._verify(goal)
                     return "succeeded", f"the goal holds: {self.steps.steps_run} steps run"
                 reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
             else:
@@ -290,6 +306,15 @@ class Executor:
         if failure is not None:
             return "failed", str(failure)
         return "succeeded", f"every step succeeded: {self.steps.steps_run} steps run"
+
+    async def _verify(self, goal: Goal) -> None:
+        """Check each goal fact (``verify``); a failing check is logged, never fails the task."""
+        if self.verify is None:
+            return
+        try:
+            self.check = await self.verify(goal)
+        except Exception:
+            _log.exception("task %s: the goal check failed", self.task_id)
 
     async def _catch_up(self) -> None:
         """Wait until the replica shows the effects of every finished step."""

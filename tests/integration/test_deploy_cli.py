@@ -162,6 +162,9 @@ def test_the_documented_deployment_runs_the_example_file_then_the_goal(site: Dep
     )
     goal_seconds = time.monotonic() - t0
     assert done.returncode == 0, f"{done.stdout}\n{done.stderr}\n{site_logs(site)}"
+    # the task agent asked skimesh sim (another process) for each goal fact
+    assert "goal check (world model and physics at simulated time" in done.stdout, done.stdout
+    assert done.stdout.count("physics yes") == len(SCENARIO.goals), done.stdout
     kits = anyio.run(kit_contents, site.endpoint)
     assert kits == {"KitBox-1": {"Gear-1"}, "KitBox-2": {"Bracket-1", "Bolt-1", "Bolt-2"}}, kits
     print(f"task file {file_seconds:.1f} s, goal {goal_seconds:.1f} s")

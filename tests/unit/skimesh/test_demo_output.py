@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import re
 
-from skimesh.demo import FactCheck, MissionResult, MissionView, goal_holds, summary_lines
+from skimesh.demo import MissionResult, MissionView, goal_holds, summary_lines
 from task_agent.protocol import (
+    FactCheck,
     Planned,
     PlannedStep,
     Replanning,
