@@ -145,6 +145,10 @@ class KeySpace:
         """Command endpoint of one device of one robot."""
         return f"{self._device(robot, device)}/cmd"
 
+    def sim_truth(self) -> str:
+        """The simulator's ground-truth queryable (``sim/truth``)."""
+        return f"{self.prefix}/sim/truth"
+
     def devices(self) -> str:
         """Every device endpoint (``devices/**``)."""
         return f"{self.prefix}/devices/**"

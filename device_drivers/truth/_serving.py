@@ -30,7 +30,7 @@ __all__ = ["GroundTruth", "TruthClient", "serve_truth", "truth_handler", "truth_
 
 def truth_key(keys: KeySpace) -> str:
     """``skimesh/<mesh>/sim/truth``: the queryable of the simulator's ground truth."""
-    return f"{keys.prefix}/sim/truth"
+    return keys.sim_truth()
 
 
 class GroundTruth(Protocol):
