@@ -26,7 +26,13 @@ from rdflib.compare import isomorphic
 
 from wm_store._errors import OntologyError
 from wm_store.ontology._terms import ALL_KINDS, CLASS_NAME_RE, NAME_RE
-from wm_store.protocol import ClassDefined, OntologyDelta, TemplateDefined, TermsDefined
+from wm_store.protocol import (
+    ClassDefined,
+    OntologyDelta,
+    TemplateDefined,
+    TermsDef,
+    TermsDefined,
+)
 
 if TYPE_CHECKING:
     from wm_store.ontology._ontology import Ontology
@@ -123,17 +129,34 @@ def without_known_blank_nodes(parsed: Graph, known: Graph) -> Graph:
 
 
 def replay(base: Ontology, log: Iterable[OntologyDelta]) -> Ontology:
-    """``base`` with every delta of ``log`` applied in order (what the store did)."""
+    """``base`` with every delta of ``log`` applied in order (what the store did). Consecutive
+    taught texts are merged and compiled once: replaying a long log costs one compile per run
+    of texts, not one per text."""
     onto = base
+    texts: list[TermsDef] = []
+
+    def flush(onto: Ontology) -> Ontology:
+        if not texts:
+            return onto
+        if len(texts) == 1:
+            merged: Graph | str = texts[0].turtle
+        else:
+            merged = Graph()
+            for terms in texts:
+                merged += parse_terms(terms.turtle, terms.source)
+        sources = ", ".join(t.source for t in texts if t.source)
+        texts.clear()
+        return onto.teach(merged, source=sources)
+
     for delta in log:
         match delta:
-            case ClassDefined(cls=c):
-                onto = onto.extend(classes=[c])
-            case TemplateDefined(template=t):
-                onto = onto.extend(templates=[t])
             case TermsDefined(terms=terms):
-                onto = onto.teach(terms.turtle, source=terms.source)
-    return onto
+                texts.append(terms)
+            case ClassDefined(cls=c):
+                onto = flush(onto).extend(classes=[c])
+            case TemplateDefined(template=t):
+                onto = flush(onto).extend(templates=[t])
+    return flush(onto)
 
 
 def _check_name(name: str, what: str) -> None:
