@@ -31,6 +31,7 @@ from ._robot_file import ERD_PREFIX as ERD_PREFIX
 from ._robot_file import FileRobot as FileRobot
 from ._robot_file import RobotFileError as RobotFileError
 from ._robot_file import describe_file as describe_file
+from ._robot_file import erd_share as erd_share
 from ._robot_file import robot_file_path as robot_file_path
 from ._robot_spec import ARM_JOINTS_6 as ARM_JOINTS_6
 from ._robot_spec import ARM_JOINTS_7 as ARM_JOINTS_7
@@ -92,6 +93,7 @@ __all__ = [
     "deck_point",
     "describe_file",
     "drawer_layout",
+    "erd_share",
     "footprints",
     "known_scenarios",
     "load_scenario",

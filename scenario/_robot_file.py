@@ -33,7 +33,14 @@ from msgspec import Struct
 from ._errors import ScenarioError
 from ._robot_spec import MjcfArm
 
-__all__ = ["ERD_PREFIX", "FileRobot", "RobotFileError", "describe_file", "robot_file_path"]
+__all__ = [
+    "ERD_PREFIX",
+    "FileRobot",
+    "RobotFileError",
+    "describe_file",
+    "erd_share",
+    "robot_file_path",
+]
 
 ERD_PREFIX = "example-robot-data:"
 """``package`` prefix naming a robot of the ``example-robot-data`` wheel."""
@@ -91,14 +98,21 @@ def robot_file_path(arm: MjcfArm) -> Path:
     return path.resolve()
 
 
-def _erd_path(name: str) -> Path:
+def erd_share(what: str) -> Path:
+    """The ``share/example-robot-data`` folder of the installed wheel (``package://
+    example-robot-data/...`` mesh paths are relative to it); ``what`` names the file or robot
+    that needs it in the :class:`RobotFileError` raised when the wheel is not installed."""
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
         raise RobotFileError(
-            ERD_PREFIX + name, "package not installed: pip install example-robot-data"
+            what, "package not installed: pip install example-robot-data"
         ) from None
-    robots = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data")))
+
+
+def _erd_path(name: str) -> Path:
+    robots = erd_share(ERD_PREFIX + name) / "robots"
     candidates = [robots / name] if "/" in name else []
     candidates += [robots / f"{name}_description/{d}/{name}.urdf" for d in ("urdf", "robots")]
     for path in candidates:

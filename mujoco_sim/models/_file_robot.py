@@ -37,7 +37,15 @@ import numpy.typing as npt
 
 from mujoco_sim.models._menagerie import load_mjcf, rename_clashes
 from mujoco_sim.physics._options import configure_physics
-from scenario import FileRobot, MjcfArm, RobotFileError, RobotLayout, RobotSpec, describe_file
+from scenario import (
+    FileRobot,
+    MjcfArm,
+    RobotFileError,
+    RobotLayout,
+    RobotSpec,
+    describe_file,
+    erd_share,
+)
 
 __all__ = ["add_file_robot", "derive_gripper", "load_robot_file"]
 
@@ -91,9 +99,7 @@ def _mesh_path(name: str, urdf: Path) -> Path:
     if name.startswith("package://"):
         package, _, rest = name.removeprefix("package://").partition("/")
         if package == "example-robot-data":  # <share>/example-robot-data/robots/...
-            for parent in urdf.parents:
-                if parent.name == "example-robot-data":
-                    return parent / rest
+            return erd_share(str(urdf)) / rest
         for parent in urdf.parents:  # a ROS package: the folder named like it
             if parent.name == package:
                 return parent / rest

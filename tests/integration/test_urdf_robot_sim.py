@@ -1,5 +1,6 @@
 """Robots from one URDF file in the simulation: the kitting scenario's robot ``r2`` built from
-``example-robot-data``'s URDFs (``[robots.model.mjcf] package = ...``, offline), its chain, tool
+``example-robot-data``'s Panda URDF (``[robots.model.mjcf] package = ...``, offline), or a
+UR5 with a Franka hand from one URDF beside the scenario (``arm_xml``), its chain, tool
 frame, gripper and pads derived from the file. The shipped skills navigate, pick a part from a
 part box on a shelf and place it into the robot's kit box; the physics confirms it arrived."""
 
@@ -10,12 +11,14 @@ from pathlib import Path
 
 import anyio
 import msgspec
+import numpy as np
 import pytest
 
-from device_drivers import GripperState
-from mujoco_sim import WorldOptions, running_world
-from scenario import MjcfArm, load_scenario
+from device_drivers import Arm, Gripper, GripperState
+from mujoco_sim import WorldOptions, running_world, sim_devices
+from scenario import UR5E_JOINTS, parse_scenario
 from scenario.wm import scenario_ops
+from skill_agent.primitives import close_gripper, move_cartesian, open_gripper
 from tests.integration.test_skills_sim import KITTING, Sim, run
 from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology, Rel
@@ -28,16 +31,22 @@ ROOT = Path(__file__).resolve().parents[2]
 PANDA_TOML = ROOT / "configs/scenarios/kitting-panda/scenario.toml"
 
 
-async def _sim(arm: MjcfArm | None) -> AsyncIterator[Sim]:
-    scenario = load_scenario(PANDA_TOML)
-    if arm is not None:
-        robots = [
-            msgspec.structs.replace(r, model=msgspec.structs.replace(r.model, mjcf=arm))
-            if r.name == "r2"
-            else r
-            for r in scenario.robots
-        ]
-        scenario = msgspec.structs.replace(scenario, robots=robots)
+#: The shipped scenario with r2 a UR5 carrying a Franka hand: one URDF next to the scenario
+#: (a relative path), joined from example-robot-data's UR5 and Panda files.
+UR5_HAND = (
+    'package = "example-robot-data:panda"',
+    'arm_xml = "ur5_franka_hand.urdf"',
+    "home = [0.0, -0.85, 0.0, -2.61, 0.0, 1.76, -0.785]",
+    "home = [-0.577, -2.374, 2.112, -1.308, -1.571, 2.564]",
+)
+
+
+async def _sim(*replace: str) -> AsyncIterator[Sim]:
+    text = PANDA_TOML.read_text()
+    for old, new in zip(replace[::2], replace[1::2], strict=True):
+        assert old in text
+        text = text.replace(old, new)
+    scenario = parse_scenario(text, base_dir=PANDA_TOML.parent)
     ontology = Ontology.default()
     store = await WmStore.open(ontology)
     async with anyio.create_task_group() as tg:
@@ -54,7 +63,13 @@ async def _sim(arm: MjcfArm | None) -> AsyncIterator[Sim]:
 
 @pytest.fixture
 async def panda() -> AsyncIterator[Sim]:
-    async for sim in _sim(None):  # the shipped scenario: r2 is a Panda
+    async for sim in _sim():  # the shipped scenario: r2 is a Panda
+        yield sim
+
+
+@pytest.fixture
+async def ur5_hand() -> AsyncIterator[Sim]:
+    async for sim in _sim(*UR5_HAND):
         yield sim
 
 
@@ -81,3 +96,23 @@ async def _pick_and_place(sim: Sim, part: str, hand: str) -> None:
 @pytest.mark.slow
 async def test_panda_picks_a_bolt_and_places_it_in_its_kit_box(panda: Sim) -> None:
     await _pick_and_place(panda, "Bolt-1", "r2/panda_hand")
+
+
+async def test_a_ur5_with_a_franka_hand_from_a_urdf_beside_the_scenario(ur5_hand: Sim) -> None:
+    """Derived from the joined file: a straight tool move tracks the line, the gripper opens to
+    a width in metres and closes on nothing."""
+    devices = sim_devices(ur5_hand.world, "r2")
+    arm, gripper = devices[("r2", "arm")], devices[("r2", "gripper")]
+    assert isinstance(arm, Arm) and isinstance(gripper, Gripper)
+    assert set((await arm.state()).joints) == set(UR5E_JOINTS)
+    tcp = (await arm.state()).tcp
+    goal = msgspec.structs.replace(tcp, x=tcp.x + 0.05, y=tcp.y - 0.05, z=tcp.z - 0.1)
+    await move_cartesian(arm, goal, speed=0.1)
+    reached = (await arm.state()).tcp
+    assert np.allclose((reached.x, reached.y, reached.z), (goal.x, goal.y, goal.z), atol=3e-3)
+    await gripper.open(0.04)
+    assert (await gripper.state()).opening == pytest.approx(0.04, abs=3e-3)
+    assert not await close_gripper(gripper)  # nothing between the pads
+    assert (await gripper.state()).opening < 0.003
+    await open_gripper(gripper)
+    assert (await gripper.state()).opening > 0.075
