@@ -140,6 +140,13 @@ def describe_file(arm: MjcfArm) -> FileRobot:
     base = arm.base_link or (roots[0] if roots else "")
     if base not in links:
         raise RobotFileError(file, f"no link named {base!r}", key="base_link")
+    above = (_path(roots[0], base, joints) if roots else None) or []
+    if any(j in by_name for j in above):  # the links above base_link are fixed on the mount
+        raise RobotFileError(
+            file,
+            f"movable joints above {base!r}: {[j for j in above if j in by_name]}",
+            key="base_link",
+        )
     gripper = arm.gripper_joints or _gripper_joints(base, children, by_name)
     if not gripper:
         raise RobotFileError(

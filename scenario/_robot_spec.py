@@ -99,7 +99,13 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     or MJCF file with the arm and its gripper."""
     gripper_xml: str = ""
     """Gripper MJCF file (e.g. ``mujoco_menagerie/robotiq_2f85/2f85.xml``)."""
-    package: str = ""
+    package: Annotated[
+        str,
+        Meta(
+            description="example-robot-data:<robot> (e.g. panda): that wheel's URDF of the "
+            "robot, arm and gripper in one file; or a path inside its robots folder"
+        ),
+    ] = ""
     """``example-robot-data:<robot>`` (e.g. ``panda``): that wheel's URDF of the robot, arm and
     gripper in one file; or a path inside its ``robots`` folder."""
     arm_joints: tuple[str, ...] = UR5E_JOINTS
@@ -116,8 +122,8 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """Gripper site used as tool centre point: z along the approach, y along the closing axis
     (one file: default derived, a site ``tcp`` added between the finger pads)."""
     gripper_actuator: str = "fingers_actuator"
-    """The one actuator of the fingers (one file: a position servo ``gripper`` is added on the
-    driven gripper joint)."""
+    """The one actuator of the fingers (one file: unused; a position servo ``gripper`` is added
+    on the driven gripper joint)."""
     finger_joints: tuple[str, str] = ("left_driver_joint", "right_driver_joint")
     """The left and right finger joints (one file: derived from the gripper joints)."""
     left_pads: tuple[str, ...] = ("left_pad1", "left_pad2")
@@ -131,24 +137,68 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     gravity_compensation: bool = True
     """Compensate the arm's and gripper's weight in the physics, as a real arm controller does
     (position servos of Menagerie arms sag otherwise)."""
-    base_link: str = ""
+    base_link: Annotated[
+        str,
+        Meta(
+            description="one file: link (body) the IK chain starts at, fixed on the arm "
+            "mount; empty: the file's root link"
+        ),
+    ] = ""
     """One file: the link (body) the IK chain starts at, fixed on the arm mount; default the
     file's root link."""
-    tool_link: str = ""
+    tool_link: Annotated[
+        str,
+        Meta(
+            description="one file: link carrying the tool frame, grasped objects are welded "
+            "to it; empty: the link the gripper joints hang from"
+        ),
+    ] = ""
     """One file: the link the tool frame is fixed to and grasped objects are welded to;
     default the link the gripper joints hang from."""
-    tcp_offset: tuple[float, float, float] | None = None
+    tcp_offset: Annotated[
+        tuple[float, float, float] | None,
+        Meta(
+            description="one file: tool centre point in the tool_link frame, m (x, y, z); "
+            "unset: between the finger pads"
+        ),
+    ] = None
     """One file: tool centre point in the ``tool_link`` frame, m; default between the pads."""
-    gripper_joints: tuple[str, ...] = ()
+    gripper_joints: Annotated[
+        tuple[str, ...],
+        Meta(
+            description="one file: joints moving the fingers, the driven one first (the "
+            "others follow it by <mimic> or a joint equality); empty: derived"
+        ),
+    ] = ()
     """One file: the joints moving the fingers, driven one first (the others follow it by
     ``<mimic>`` or an equality); default derived (see :func:`scenario.describe_file`)."""
-    gripper_open: float | None = None
+    gripper_open: Annotated[
+        float | None,
+        Meta(
+            description="one file: driven gripper joint's value when open, m (prismatic) or "
+            "rad (revolute); unset: the end of its range where the pads are farthest apart"
+        ),
+    ] = None
     """One file: the driven gripper joint's value when open, m or rad; default the end of its
     range where the pads are farthest apart."""
-    gripper_closed: float | None = None
+    gripper_closed: Annotated[
+        float | None,
+        Meta(
+            description="one file: driven gripper joint's value when closed, m or rad; "
+            "unset: the other end of its range"
+        ),
+    ] = None
     """One file: the driven gripper joint's value when closed, m or rad; default the other end
     of its range."""
-    arm_kp: Annotated[float, Meta(gt=0, le=1e5)] = 1000.0
+    arm_kp: Annotated[
+        float,
+        Meta(
+            gt=0,
+            le=1e5,
+            description="one file: stiffness of the added arm servos, N·m/rad (N/m for a "
+            "prismatic joint); critically damped",
+        ),
+    ] = 1000.0
     """One file: stiffness of the added arm servos, N·m/rad (N/m for a prismatic joint)."""
 
     @property
@@ -337,7 +387,7 @@ def _one_file_layout(arm: MjcfArm, p: str) -> RobotLayout:
             p + j for j in (arm.arm_joints if arm.given("arm_joints") else robot.arm_joints)
         ),
         finger_joints=(p + fingers[0], p + fingers[1]),
-        gripper_actuator=p + (arm.gripper_actuator if arm.given("gripper_actuator") else "gripper"),
+        gripper_actuator=f"{p}gripper",
         tcp_site=p + (arm.tcp_site if arm.given("tcp_site") else "tcp"),
         base_site=f"{p}base_site",
         deck_site=f"{p}deck",

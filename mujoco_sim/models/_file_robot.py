@@ -47,7 +47,7 @@ from scenario import (
     erd_share,
 )
 
-__all__ = ["add_file_robot", "derive_gripper", "load_robot_file"]
+__all__ = ["GripperGeometry", "add_file_robot", "derive_gripper", "load_robot_file", "set_gripper"]
 
 FloatArray = npt.NDArray[np.float64]
 _MESH_SUFFIXES = {".stl", ".obj", ".msh"}

@@ -7,7 +7,7 @@ from pathlib import Path
 import mujoco
 import pytest
 
-from mujoco_sim.models import build_robot
+from mujoco_sim.models import build_robot, load_robot_file
 from mujoco_sim.models.__main__ import main as inspect_main
 from scenario import MjcfArm, RobotFileError, RobotSpec, describe_file, robot_layout
 
@@ -71,3 +71,19 @@ def test_the_inspect_command_prints_what_was_derived(capsys: pytest.CaptureFixtu
     assert inspect_main([str(toml)]) == 0
     out = capsys.readouterr().out
     assert "r2/panda_joint7" in out and "r2/panda_hand" in out
+
+
+def test_one_mjcf_file_gives_the_same_robot(tmp_path: Path) -> None:
+    """The Panda written out as one MJCF file (MuJoCo's own conversion of the URDF): the same
+    chain, gripper (the <mimic> is a joint equality there) and tool frame are derived."""
+    urdf = build_robot(RobotSpec(name="r1", mjcf=PANDA)).compile()
+    path = tmp_path / "panda.xml"
+    path.write_text(load_robot_file(describe_file(PANDA)).to_xml())
+    arm = MjcfArm(arm_xml=str(path), home=PANDA_HOME)
+    robot = describe_file(arm)
+    assert robot.kind == "mjcf"
+    assert robot.arm_joints == describe_file(PANDA).arm_joints
+    assert robot.gripper_joints == ("panda_finger_joint1", "panda_finger_joint2")
+    model = build_robot(RobotSpec(name="r1", mjcf=arm)).compile()
+    tcp = model.site("r1/tcp").id
+    assert model.site_pos[tcp] == pytest.approx(urdf.site_pos[urdf.site("r1/tcp").id], abs=1e-6)
