@@ -92,6 +92,12 @@ def load_robot_file(robot: FileRobot) -> mujoco.MjSpec:
     except ValueError as exc:
         raise RobotFileError(robot.path, f"MuJoCo cannot load the URDF: {exc}") from None
     configure_physics(mj)
+    for joint in root.iter("joint"):  # MuJoCo's URDF import keeps no effort limit
+        limit, element = joint.find("limit"), mj.joint(joint.get("name", ""))
+        effort = float(limit.get("effort", "0")) if limit is not None else 0.0
+        if element is not None and effort > 0:
+            element.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            element.actfrcrange = [-effort, effort]
     return mj
 
 
