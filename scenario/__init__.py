@@ -27,6 +27,12 @@ from ._placement import deck_point as deck_point
 from ._placement import footprints as footprints
 from ._placement import object_centres as object_centres
 from ._placement import resolve_placements as resolve_placements
+from ._robot_file import ERD_PREFIX as ERD_PREFIX
+from ._robot_file import FileRobot as FileRobot
+from ._robot_file import RobotFileError as RobotFileError
+from ._robot_file import describe_file as describe_file
+from ._robot_file import erd_share as erd_share
+from ._robot_file import robot_file_path as robot_file_path
 from ._robot_spec import ARM_JOINTS_6 as ARM_JOINTS_6
 from ._robot_spec import ARM_JOINTS_7 as ARM_JOINTS_7
 from ._robot_spec import RGBA as RGBA
@@ -57,6 +63,7 @@ __all__ = [
     "DOOR_HANDLE_INSET",
     "DOOR_HANDLE_STANDOFF",
     "DRAWER_CLEARANCE",
+    "ERD_PREFIX",
     "HANDLE_HALF",
     "PANEL",
     "RGBA",
@@ -68,12 +75,14 @@ __all__ = [
     "ContainerEntry",
     "DrawerLayout",
     "DrawerSpec",
+    "FileRobot",
     "Footprint",
     "FurnitureEntry",
     "MjcfArm",
     "PartEntry",
     "Placement",
     "RobotEntry",
+    "RobotFileError",
     "RobotLayout",
     "RobotSpec",
     "Scenario",
@@ -82,7 +91,9 @@ __all__ = [
     "WorldPlacement",
     "check_scenario",
     "deck_point",
+    "describe_file",
     "drawer_layout",
+    "erd_share",
     "footprints",
     "known_scenarios",
     "load_scenario",
@@ -90,5 +101,6 @@ __all__ = [
     "parse_scenario",
     "read_scenario",
     "resolve_placements",
+    "robot_file_path",
     "robot_layout",
 ]

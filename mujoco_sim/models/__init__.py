@@ -1,11 +1,15 @@
 """MuJoCo model building: the generated mobile manipulator (:func:`build_robot`,
-:func:`build_world`), grippers, arms from MJCF files (Menagerie), cabinets with drawers, and
-the whole scene of a scenario (:func:`build_scene`).
+:func:`build_world`), grippers, arms from MJCF files (Menagerie) or an arm with its gripper
+from one URDF or MJCF file (:func:`add_file_robot`), cabinets with drawers, and the whole scene
+of a scenario (:func:`build_scene`). ``python -m mujoco_sim.models SCENARIO`` prints what each
+robot's files gave.
 """
 
 from __future__ import annotations
 
 from ._drawer import add_cabinet as add_cabinet
+from ._file_robot import add_file_robot as add_file_robot
+from ._file_robot import load_robot_file as load_robot_file
 from ._gripper import GRIPPER_KP as GRIPPER_KP
 from ._gripper import add_gripper_drive as add_gripper_drive
 from ._gripper import add_parallel_gripper as add_parallel_gripper
@@ -22,6 +26,7 @@ from ._scene import weld_name as weld_name
 __all__ = [
     "GRIPPER_KP",
     "add_cabinet",
+    "add_file_robot",
     "add_gripper_drive",
     "add_mjcf_arm",
     "add_parallel_gripper",
@@ -30,6 +35,7 @@ __all__ = [
     "build_world",
     "graspable_labels",
     "load_mjcf",
+    "load_robot_file",
     "look_at_quat",
     "menagerie_paths",
     "weld_name",

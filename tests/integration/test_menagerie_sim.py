@@ -35,7 +35,7 @@ KITTING_TOML = Path(__file__).resolve().parents[2] / "configs/scenarios/kitting/
 
 def test_a_scenario_robot_names_its_mjcf_files(tmp_path: Path) -> None:
     """``[robots.model.mjcf]`` in a scenario: relative paths resolve against the scenario
-    file; a half-given pair of files is a scenario error naming the field."""
+    file; a gripper file without an arm file is a scenario error naming the field."""
     text = (
         KITTING_TOML.read_text()
         .replace(
@@ -50,7 +50,7 @@ def test_a_scenario_robot_names_its_mjcf_files(tmp_path: Path) -> None:
     assert files is not None
     assert (files.arm_xml, files.gripper_xml) == (str(tmp_path / "arms/ur5e.xml"), "/opt/2f85.xml")
     with pytest.raises(Exception, match=r"robots\[1\].model.mjcf"):
-        parse_scenario(text.replace(', gripper_xml = "/opt/2f85.xml"', ""))
+        parse_scenario(text.replace('arm_xml = "arms/ur5e.xml", ', ""))  # gripper alone
 
 
 @pytest.fixture

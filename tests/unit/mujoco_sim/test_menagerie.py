@@ -125,7 +125,7 @@ def test_missing_files_name_the_path_and_the_fix(tmp_path: Path) -> None:
         build_robot(spec)
     assert str(missing) in str(info.value)
     with pytest.raises(ValueError, match="both"):
-        MjcfArm(arm_xml=str(missing))
+        MjcfArm(gripper_xml=str(missing))  # arm_xml alone is a one-file robot
     with pytest.raises(ValueError, match="6 joints"):
         MjcfArm(home=(0.0,))
 
