@@ -53,10 +53,14 @@ class AgentService:
         *,
         registry: SkillRegistry | None = None,
         on_reload: Callable[[], Awaitable[None]] | None = None,
+        before_reload: Callable[[], Awaitable[None]] | None = None,
     ) -> None:
         self.core = core
         self.registry = registry
         self.on_reload = on_reload
+        self.before_reload = before_reload
+        """Run before a reload checks the skills (the agent teaches the world model its
+        skills' terms and takes the world model's current ontology)."""
         self._reload_lock = anyio.Lock()
         self.rpc: RequestHandler[AgentRequest, AgentReply] = RequestHandler(
             AgentRequest,
@@ -137,6 +141,8 @@ class AgentService:
         if registry is None:
             raise RunStateError(f"agent {self.core.name} has no plug-in registry to reload")
         async with self._reload_lock:
+            if self.before_reload is not None:
+                await self.before_reload()
             entries = await anyio.to_thread.run_sync(registry.reload)
             self.core.replace_skills(entries)
             if self.on_reload is not None:

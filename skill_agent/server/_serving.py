@@ -95,7 +95,11 @@ async def serve_agent(
     async def reregister() -> None:
         await _register(wm, core, config, address, drivers)
 
-    service = AgentService(core, registry=registry, on_reload=reregister)
+    async def teach() -> None:
+        if registry is not None:
+            await teach_terms(wm, config, registry)
+
+    service = AgentService(core, registry=registry, on_reload=reregister, before_reload=teach)
 
     publisher = RunEventPublisher(mesh, name)
     unsubscribe = publisher.attach(core)
