@@ -39,7 +39,7 @@ PREFIXES = (
 
 def site_terms() -> list[str]:
     classes = PREFIXES + "".join(
-        f"skm:{name} a owl:Class ; rdfs:subClassOf skm:Part ; rdfs:label \"{name}\"@en .\n"
+        f'skm:{name} a owl:Class ; rdfs:subClassOf skm:Part ; rdfs:label "{name}"@en .\n'
         for name in ("Bearing", "Pulley")
     )
     return [

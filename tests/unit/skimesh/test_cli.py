@@ -4,6 +4,7 @@ long-running command, and clear usage errors."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import pytest
 
@@ -103,3 +104,14 @@ def test_the_operator_says_where_they_see_things() -> None:
     for bad in ("MealBox-1", "MealBox-1=1,2", "=1,2,3", "MealBox-1=a,b,c"):
         with pytest.raises(SystemExit):
             parse("operator", "--answer", "3", "success", "--seen", bad)
+
+
+def test_demo_ontology_files_join_the_scenarios(tmp_path: Path) -> None:
+    from skimesh.commands.demo import _setup
+
+    extra = tmp_path / "extra.ttl"
+    extra.write_text("@prefix skm: <https://skimesh.dev/ontology#> .\n")
+    setup = _setup(parse("demo", "--ontology", str(extra)), tmp_path)
+    assert setup.scenario.ontology[-1] == str(extra.resolve())
+    with pytest.raises(ValueError, match="no file"):
+        _setup(parse("demo", "--ontology", str(tmp_path / "missing.ttl")), tmp_path)
