@@ -56,7 +56,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--scenario",
         default="kitting",
-        help="kitting, meal, or a scenario file (default: %(default)s)",
+        help="a shipped scenario (kitting, meal, workshop, kitting-panda) or a scenario file "
+        "(default: %(default)s)",
     )
     p.add_argument(
         "--ontology",

@@ -28,7 +28,7 @@ SCENARIOS = Path(__file__).resolve().parents[3] / "configs" / "scenarios"
 FAST = WorldOptions(fast=True)
 
 
-@pytest.mark.parametrize("name", ["kitting", "meal"])
+@pytest.mark.parametrize("name", ["kitting", "meal", "workshop"])
 async def test_scenario_builds_and_steps_without_divergence(name: str) -> None:
     scenario = load_scenario(SCENARIOS / name / "scenario.toml")
     async with running_world(scenario, FAST) as world:

@@ -52,7 +52,7 @@ size = [0.02, 0.02]
 """
 
 
-@pytest.mark.parametrize("name", ["kitting", "meal"])
+@pytest.mark.parametrize("name", ["kitting", "meal", "workshop", "kitting-panda"])
 def test_shipped_scenarios_load(name: str) -> None:
     scenario = load_scenario(SCENARIOS / name / "scenario.toml")
     assert scenario.name == name
