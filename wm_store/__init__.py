@@ -38,6 +38,7 @@ from ._errors import HistoryCompactedError as HistoryCompactedError
 from ._errors import OntologyError as OntologyError
 from ._errors import PropertyValueError as PropertyValueError
 from ._errors import ProtocolError as ProtocolError
+from ._errors import QueryLimitError as QueryLimitError
 from ._errors import RelationDomainError as RelationDomainError
 from ._errors import RemoteError as RemoteError
 from ._errors import RevisionTimeoutError as RevisionTimeoutError
@@ -73,6 +74,7 @@ __all__ = [
     "OntologyError",
     "PropertyValueError",
     "ProtocolError",
+    "QueryLimitError",
     "RelationDomainError",
     "RemoteError",
     "Replica",

@@ -16,7 +16,8 @@ Hierarchy::
     │   ├── CardinalityError           more (or fewer) relations than the ontology allows
     │   ├── ElementNotFoundError       no element with that id
     │   ├── DuplicateIdError           an explicit id that is taken or was used before
-    │   └── ConflictError              compare-and-set failed: the element or store moved on
+    │   ├── ConflictError              compare-and-set failed: the element or store moved on
+    │   └── QueryLimitError            a SPARQL query over a limit: text size, time, rows, queue
     ├── ProtocolError                  bytes that do not decode to a request/reply of this schema,
     │                                  or a request over the size limit
     ├── HistoryCompactedError          changes-since asked for revisions no longer kept
@@ -57,6 +58,7 @@ __all__ = [
     "OntologyError",
     "PropertyValueError",
     "ProtocolError",
+    "QueryLimitError",
     "RelationDomainError",
     "RemoteError",
     "RevisionTimeoutError",
@@ -131,6 +133,10 @@ class ConflictError(ValidationError):
     code = "conflict"
 
 
+class QueryLimitError(ValidationError):
+    code = "query_limit"
+
+
 class ProtocolError(WmError):
     code = "protocol_error"
 
@@ -185,6 +191,7 @@ _BY_CODE = errors_by_code(
     ElementNotFoundError,
     DuplicateIdError,
     ConflictError,
+    QueryLimitError,
     ProtocolError,
     HistoryCompactedError,
     StorageError,

@@ -28,7 +28,9 @@ Everything but :class:`SparqlEngine` is pure and synchronous; cost is linear in 
 dominated by rdflib (see docs/benchmarks.md, section "World model").
 
 Inside: ``_graph`` (the mapping and the export), ``_turtle_import``, ``_sparql`` (the engine:
-graph cache and threads) and ``_sparql_eval`` (one query: checks, bindings, rows).
+graph cache and threads), ``_sparql_eval`` (one query: checks, bindings, rows) and ``_worker``
+(:class:`SparqlWorker`: the store's queries in a child process, with limits on text, time,
+rows and queue).
 """
 
 from ._graph import METADATA_PREDICATES as METADATA_PREDICATES
@@ -39,12 +41,14 @@ from ._graph import scene_graph as scene_graph
 from ._sparql import SparqlEngine as SparqlEngine
 from ._sparql import build_graph as build_graph
 from ._turtle_import import import_turtle as import_turtle
+from ._worker import SparqlWorker as SparqlWorker
 
 __all__ = [
     "METADATA_PREDICATES",
     "SCENE",
     "SCENE_IRI",
     "SparqlEngine",
+    "SparqlWorker",
     "build_graph",
     "export_turtle",
     "import_turtle",

@@ -39,7 +39,7 @@ from wm_store.protocol import (
     Sparql,
     Transact,
 )
-from wm_store.rdf import SparqlEngine
+from wm_store.rdf import SparqlWorker
 from wm_store.scene import match_relations, min_cardinality_violations, resolve
 from wm_store.server._store import WmStore
 
@@ -61,13 +61,22 @@ class WmService:
     def __init__(self, store: WmStore, *, max_request_bytes: int = MAX_REQUEST_BYTES) -> None:
         self.store = store
         self.max_request_bytes = max_request_bytes
-        self._sparql = SparqlEngine()
+        config = store.config
+        self._sparql = SparqlWorker(
+            timeout=config.sparql_timeout,
+            max_text=config.sparql_max_text,
+            max_rows=config.sparql_max_rows,
+        )
         self.rpc: RequestHandler[Request, Reply] = RequestHandler(
             Request, self.handle, max_request_bytes=max_request_bytes, name="wm/rpc"
         )
         self.query: RequestHandler[Request, Reply] = RequestHandler(
             Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
         )
+
+    async def aclose(self) -> None:
+        """End what the service started (the SPARQL worker process, if any)."""
+        await self._sparql.aclose()
 
     async def handle_bytes(self, data: bytes, *, read_only: bool = False) -> tuple[bytes, bool]:
         """Decode, answer and encode one request. Returns ``(reply bytes, ok)``.
@@ -118,7 +127,14 @@ class WmService:
                     revision=state.revision, relations=[] if parent is None else [parent]
                 )
             case Sparql(query=text, bindings=bindings):
-                return await self._sparql.query_async(state, store.ontology, text, bindings)
+                return await self._sparql.query(
+                    store.snapshot,
+                    state.revision,
+                    id(store.ontology),
+                    store.core_ontology(),
+                    text,
+                    bindings,
+                )
             case Transact():
                 return await store.transact(request)
             case Snapshot(revision=revision):

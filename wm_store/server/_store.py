@@ -59,6 +59,12 @@ class StoreConfig(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_on
     """Write a snapshot (and compact the log) after this many revisions."""
     history: Annotated[int, Meta(ge=1)] = 10_000
     """How many recent changes are kept for ``changes-since`` and past snapshots."""
+    sparql_timeout: Annotated[float, Meta(gt=0)] = 10.0
+    """Seconds a SPARQL query (with the graph build it needs) may run before it is ended."""
+    sparql_max_text: Annotated[int, Meta(ge=1)] = 16 * 1024
+    """Longest SPARQL text accepted, bytes."""
+    sparql_max_rows: Annotated[int, Meta(ge=1)] = 10_000
+    """Most rows (or triples) a SPARQL reply may hold."""
     max_ops: Annotated[int, Meta(ge=1)] = 10_000
     """Largest number of ops one transaction may carry."""
     dedupe: Annotated[int, Meta(ge=0)] = 10_000
@@ -283,14 +289,19 @@ class WmStore:
         reply = await self.transact(Transact(ops=ops, author=author or "wm"))
         return reply.revision
 
-    def ontology_reply(self) -> OntologyReply:
-        """The store's ontology: its core text and what was taught since, in order."""
+    def core_ontology(self) -> tuple[str, str]:
+        """The core ontology the log is replayed on, as (digest, Turtle text)."""
         if self._core_text is None:
             self._core_text = self._base_ontology.core_turtle()
+        return self._base_ontology.digest, self._core_text
+
+    def ontology_reply(self) -> OntologyReply:
+        """The store's ontology: its core text and what was taught since, in order."""
+        digest, core = self.core_ontology()
         return OntologyReply(
             revision=self.state.revision,
-            core=self._core_text,
-            core_digest=self._base_ontology.digest,
+            core=core,
+            core_digest=digest,
             taught=list(self.state.ontology_log),
         )
 

@@ -76,6 +76,8 @@ async def serve_store(
                 )
                 task_status.started()
     finally:
+        with anyio.CancelScope(shield=True):
+            await service.aclose()
         await store.aclose()
 
 

@@ -1,0 +1,191 @@
+"""SPARQL in a worker process: no query can stall the store.
+
+The store's event loop never parses or evaluates SPARQL. :class:`SparqlWorker` hands each
+query to a child process that holds a copy of the scene (a snapshot at the revision the query
+is for, sent when the revision moved on) and the store's ontology, where a
+:class:`~wm_store.rdf.SparqlEngine` parses, checks and evaluates it. The loop pays only the
+snapshot's encoding on a new revision and the pipe's I/O, which runs in a worker thread.
+
+Limits, each refused with :class:`~wm_store.QueryLimitError` (code ``query_limit``):
+
+- **text**: a query longer than ``max_text`` bytes is refused before it leaves the loop;
+- **time**: a query (with the graph build it needs) running longer than ``timeout`` seconds is
+  ended by killing the child; the next query starts a fresh one;
+- **rows**: more than ``max_rows`` rows (SELECT) or triples (CONSTRUCT) end the query;
+- **queue**: one query runs at a time; more than ``max_waiting`` waiting are refused as busy.
+
+The child is started (``spawn``: never a fork of a process with a Zenoh session) on the
+first query, not before, and ends when its pipe closes, so it dies with the store even after a
+SIGKILL. A child that dies otherwise is replaced on the next query.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+from collections.abc import Mapping
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
+from typing import Any, Final
+
+import anyio
+import msgspec
+
+from meshlink.rpc import ErrorReply, encode
+from wm_store._errors import WM_CODES, QueryLimitError, ValidationError, WmError, remote_error
+from wm_store.protocol import SnapshotReply, SparqlReply
+
+__all__ = ["SparqlWorker"]
+
+_log = logging.getLogger(__name__)
+_snapshot: Final = msgspec.msgpack.Decoder(SnapshotReply)
+_reply: Final = msgspec.msgpack.Decoder(SparqlReply)
+
+
+class SparqlWorker:
+    """One child process answering SPARQL for one store (see the module doc)."""
+
+    def __init__(
+        self,
+        *,
+        timeout: float = 10.0,
+        max_text: int = 16 * 1024,
+        max_rows: int = 10_000,
+        max_waiting: int = 8,
+    ) -> None:
+        self.timeout, self.max_text = timeout, max_text
+        self.max_rows, self.max_waiting = max_rows, max_waiting
+        self._process: BaseProcess | None = None
+        self._conn: Connection | None = None
+        self._synced: tuple[int, int] | None = None
+        """(revision, id of the ontology) of the snapshot the child holds."""
+        self._lock = anyio.Lock()
+        self._waiting = 0
+        self.started = 0
+        """How many children were started (statistics; tests see a runaway replaced)."""
+
+    async def query(
+        self,
+        snapshot: Any,
+        revision: int,
+        ontology_key: int,
+        core: tuple[str, str],
+        text: str,
+        bindings: Mapping[str, str],
+    ) -> SparqlReply:
+        """Answer ``text`` over the scene at ``revision``. ``snapshot()`` gives the scene's
+        :class:`SnapshotReply` (called on the loop only when the child's copy is stale);
+        ``ontology_key`` changes whenever the ontology does; ``core`` is the store's core
+        ontology as (digest, Turtle). Raises QueryLimitError or ValidationError."""
+        size = len(text.encode())
+        if size > self.max_text:
+            raise QueryLimitError(
+                f"the SPARQL text is {size} bytes, over the limit of {self.max_text}"
+            )
+        if self._waiting >= self.max_waiting:
+            raise QueryLimitError(
+                f"the SPARQL worker is busy ({self._waiting} queries waiting); try again later"
+            )
+        self._waiting += 1
+        try:
+            async with self._lock:
+                return await self._run(snapshot, revision, ontology_key, core, text, bindings)
+        finally:
+            self._waiting -= 1
+
+    async def _run(
+        self,
+        snapshot: Any,
+        revision: int,
+        ontology_key: int,
+        core: tuple[str, str],
+        text: str,
+        bindings: Mapping[str, str],
+    ) -> SparqlReply:
+        conn = await self._child(core)
+        messages: list[tuple[Any, ...]] = []
+        if self._synced != (revision, ontology_key):
+            messages.append(("scene", encode(snapshot())))
+            self._synced = (revision, ontology_key)
+        messages.append(("query", text, dict(bindings), self.max_rows))
+        try:
+            with anyio.fail_after(self.timeout):
+                for message in messages:
+                    await anyio.to_thread.run_sync(conn.send, message)
+                answer = await anyio.to_thread.run_sync(conn.recv, abandon_on_cancel=True)
+        except TimeoutError:
+            await self._stop()
+            raise QueryLimitError(
+                f"the SPARQL query ran longer than {self.timeout} s and was stopped; "
+                "narrow the pattern or add LIMIT"
+            ) from None
+        except (EOFError, OSError) as exc:
+            await self._stop()
+            raise QueryLimitError(f"the SPARQL worker ended during the query ({exc})") from None
+        kind, *rest = answer
+        if kind == "ok":
+            return _reply.decode(rest[0])
+        code, message = rest
+        reply = ErrorReply(code=code, message=message)
+        raise WM_CODES.get(code, remote_error)(reply)
+
+    async def _child(self, core: tuple[str, str]) -> Connection:
+        if self._conn is not None and self._process is not None and self._process.is_alive():
+            return self._conn
+        await self._stop()
+        context = multiprocessing.get_context("spawn")
+        parent, child = context.Pipe()
+        process = context.Process(
+            target=_serve, args=(child, core), name="skimesh-sparql", daemon=True
+        )
+        await anyio.to_thread.run_sync(process.start)
+        child.close()
+        self._process, self._conn, self._synced = process, parent, None
+        self.started += 1
+        return parent
+
+    async def _stop(self) -> None:
+        process, conn = self._process, self._conn
+        self._process = self._conn = self._synced = None
+        if conn is not None:
+            conn.close()
+        if process is not None and process.is_alive():
+            process.kill()
+            await anyio.to_thread.run_sync(process.join, 5.0)
+
+    async def aclose(self) -> None:
+        """End the child (if any)."""
+        await self._stop()
+
+
+def _serve(conn: Connection, core: tuple[str, str]) -> None:
+    """The child: keep the scene it was sent, answer queries until the pipe closes."""
+    from wm_store.ontology import Ontology, replay
+    from wm_store.rdf._sparql import SparqlEngine
+    from wm_store.scene import SceneState
+
+    digest, text = core
+    base = Ontology.default()
+    if digest and digest != base.digest:
+        base = Ontology.load(text)
+    engine = SparqlEngine(max_rows=0)
+    state, ontology = SceneState(), base
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        try:
+            if message[0] == "scene":
+                snap = _snapshot.decode(message[1])
+                ontology = replay(base, snap.ontology)
+                spatial = (n for n, r in ontology.relations.items() if r.spatial)
+                state = SceneState.from_snapshot(snap, spatial)
+                continue
+            _, query, bindings, max_rows = message
+            engine.max_rows = max_rows
+            conn.send(("ok", encode(engine.query(state, ontology, query, bindings))))
+        except WmError as exc:
+            conn.send(("error", exc.code, str(exc)))
+        except Exception as exc:  # rdflib and the parser raise anything
+            conn.send(("error", ValidationError.code, f"{type(exc).__name__}: {exc}"))
