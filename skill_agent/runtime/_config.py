@@ -70,16 +70,29 @@ Probability = Annotated[float, Meta(ge=0.0, le=1.0)]
 
 
 class RobotConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """The robot (or appliance) the agent controls; reused in the world model by label."""
+    """The robot (or appliance) the agent controls; reused in the world model by label.
+
+    Attributes:
+        type: Ontology class of the robot (or appliance).
+        label: World-model label of the robot; defaults to the agent's ``name``. An element with
+            this label (e.g. from the scenario) is reused.
+        properties: Data properties written on the robot element (ontology property name -> value).
+    """
 
     type: str = "Robot"
     label: str = ""
-    """Defaults to the agent's name."""
     properties: dict[str, Value] = {}
 
 
 class DeviceConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """One device of the robot (``hasA``): the hardware skills lock while they run."""
+    """One device of the robot (``hasA``): the hardware skills lock while they run.
+
+    Attributes:
+        type: Ontology class of the device, e.g. ``Arm``, ``Gripper``, ``MobileBase``, ``Camera``.
+        label: World-model label of the device (unique in this file); by convention
+            ``<robot>-<device>``.
+        properties: Data properties written on the device element (ontology property name -> value).
+    """
 
     type: str
     label: str
@@ -87,65 +100,104 @@ class DeviceConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fie
 
 
 class SkillsConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """SkillsConfig.
+
+    Attributes:
+        paths: ``pkg.mod:Class``, ``pkg.mod`` (every Skill subclass defined in it), or a file
+            ``dir/skills.py`` / ``dir/skills.py:Class`` (relative to the config file).
+        entry_points: Names in the entry-point group ``skimesh.skills``; ``"*"`` loads all of them.
+    """
+
     paths: list[str] = []
-    """``pkg.mod:Class``, ``pkg.mod`` (every Skill subclass defined in it), or a file
-    ``dir/skills.py`` / ``dir/skills.py:Class`` (relative to the config file)."""
     entry_points: list[str] = []
-    """Names in the entry-point group ``skimesh.skills``; ``"*"`` loads all of them."""
 
 
 class SimulationConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """Simulated-outcome mode: no hardware, outcomes drawn, effects applied to the WM."""
+    """Simulated-outcome mode: no hardware, outcomes drawn, effects applied to the WM.
+
+    Attributes:
+        enabled: Simulated-outcome mode: skills do not drive hardware; each run's outcome is drawn
+            and its effects written to the world model.
+        probabilities: By skill name or skill type; first match wins: name, type, the skill class's
+            own ``success_probability``, then ``default``.
+        default: Probability of skills matched by nothing else (1.0 if unset).
+        seed: Makes the sequence of drawn outcomes reproducible.
+        time_scale: A simulated run takes ``duration * time_scale`` seconds (0: at once).
+    """
 
     enabled: bool = False
     probabilities: dict[str, Probability] = {}
-    """By skill name or skill type; first match wins: name, type, the skill class's own
-    ``success_probability``, then ``default``."""
     default: Probability | None = None
-    """Probability of skills matched by nothing else (1.0 if unset)."""
     seed: int | None = None
-    """Makes the sequence of drawn outcomes reproducible."""
     time_scale: Annotated[float, Meta(ge=0)] = 0.0
-    """A simulated run takes ``duration * time_scale`` seconds (0: at once)."""
 
 
 class SensingConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """SensingConfig.
+
+    Attributes:
+        max_age (s): Default ``sensing_max_age`` for skills whose description sets none: sensing is
+            skipped when its data is younger.
+    """
+
     max_age: Annotated[float, Meta(ge=0)] | None = None
-    """Default ``sensing_max_age`` (seconds) for skills whose description sets none."""
 
 
 class ServiceSkillConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """A skill whose work is done by an external service (see :mod:`skill_agent.external`)."""
+    """A skill whose work is done by an external service (see :mod:`skill_agent.external`).
+
+    Attributes:
+        service: The service's name under ``skimesh/<mesh>/services/`` (segments separated by
+            ``/``).
+        description: The skill description the agent offers for the service (``name``, ``doc``,
+            ``parameters``, ``pre``, ``post``, ...).
+        goal_timeout (s): How long to wait for the service to accept a goal.
+    """
 
     service: str
-    """The service's name under ``skimesh/<mesh>/services/`` (segments separated by ``/``)."""
     description: SkillDescription
     goal_timeout: Annotated[float, Meta(gt=0)] = 5.0
 
 
 class AgentConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """Everything ``skimesh agent`` needs besides the mesh flags."""
+    """Everything ``skimesh agent`` needs besides the mesh flags.
+
+    Attributes:
+        name: Agent name: its liveliness token ``agents/<name>``, its key segment and its Agent
+            element in the world model.
+        agent_type: Ontology class of the agent element.
+        robot: The robot (or appliance) the agent controls.
+        devices: The robot's devices (``hasA``): the hardware skills lock while they run.
+        hardware: Hardware parameter name -> world-model label of the device bound to it: devices
+            that are not parts of the robot (a fixed overhead camera, a smart platform) offered to
+            this agent's skills. A bound parameter always gets that device (see
+            ``skill_agent.parameters``).
+        skills: Which skills the agent loads.
+        services: External services driven as skills (``skill_agent.external``).
+        conditions: Modules whose custom condition classes (``name`` + ``evaluate`` + ``symbolic``)
+            are registered for this agent's skills.
+        simulation: Simulated-outcome mode (FRIEND II): no hardware, outcomes drawn.
+        sensing: Defaults for sensing.
+        ontology: Extra Turtle files the skills' classes come from (as given to ``skimesh wm
+            --ontology``), relative to this file.
+        preempt_timeout (s): How long a stopped, timed-out or failed run's ``on_preempt`` may take.
+        event_log: Append the agent's structured event log (JSON lines) to this file (relative to
+            this file).
+    """
 
     name: str
     agent_type: str = "RobotAgent"
     robot: RobotConfig = RobotConfig()
     devices: list[DeviceConfig] = []
     hardware: dict[str, str] = {}
-    """Hardware parameter name -> world-model label of the device bound to it: devices that
-    are not parts of the robot (a fixed overhead camera, a smart platform) offered to this
-    agent's skills. A bound parameter always gets that device (see ``skill_agent.parameters``)."""
     skills: SkillsConfig = SkillsConfig()
     services: list[ServiceSkillConfig] = []
     conditions: list[str] = []
-    """Modules whose custom condition classes (``name`` + ``evaluate`` + ``symbolic``) are
-    registered for this agent's skills."""
     simulation: SimulationConfig = SimulationConfig()
     sensing: SensingConfig = SensingConfig()
     ontology: list[str] = []
-    """Extra Turtle files the skills' classes come from (as given to ``skimesh wm``)."""
     preempt_timeout: Annotated[float, Meta(gt=0)] = 5.0
     event_log: str | None = None
-    """Append the agent's structured event log (JSON lines) to this file."""
 
     def __post_init__(self) -> None:
         check_name(
