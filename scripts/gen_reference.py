@@ -12,7 +12,8 @@ Where the meaning of a key comes from (one convention, read by this script and b
   entry per key, ``name (unit): meaning`` (the unit is optional), continuation lines indented;
 - for Structs defined elsewhere (wire structs, ``device_drivers.Pose2D``), a ``Keys:`` section
   in the docstring of a module named in :data:`FORMATS`, entries ``Class.name (unit): meaning``;
-- last, an attribute docstring under the field (``x: float = 0`` then ``\"\"\"...\"\"\"``).
+- else an attribute docstring under the field (``x: float = 0`` then ``\"\"\"...\"\"\"``), or a
+  ``Meta(description=...)`` on its type (``x-unit`` in ``Meta(extra_json_schema=...)``).
 
 Types, defaults, ranges and choices come from ``msgspec.json.schema``. The JSON Schemas are
 written as JSON Schema draft 4 (the draft Taplo, the engine of VS Code's Even Better TOML,
@@ -289,7 +290,7 @@ def document(fmt: Format) -> Documented:
             schema.pop("description", None)
         tag = _tag_field(schema)
         for key, prop in schema.get("properties", {}).items():
-            unit, text = docs.get(key, ("", ""))
+            unit, text = docs.get(key, ("", prop.get("description", "")))  # or Meta's
             if not text and key == tag:
                 text = f"`{prop['enum'][0]}`: selects this kind of table."
             if text:
@@ -298,6 +299,7 @@ def document(fmt: Format) -> Documented:
                 prop.pop("description", None)
                 if cls.__module__ in fmt.complete:
                     missing.append(f"{name}.{key}")
+            unit = unit or prop.get("x-unit", "")
             if unit:
                 units[(name, key)] = unit
                 prop["x-unit"] = unit

@@ -14,6 +14,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import msgspec
 import pytest
 
 from scenario import load_scenario
@@ -132,6 +133,24 @@ def test_the_schema_carries_meanings_and_units(
     prop = _property(_schema(slug), struct, key)
     assert words in prop["description"]
     assert prop.get("x-unit", "") == unit
+
+
+class _Documented(msgspec.Struct):
+    """A table.
+
+    Attributes:
+        a (s): From the docstring.
+    """
+
+    a: float = 0.0
+    b: int = 0
+    """From an attribute docstring."""
+
+
+def test_struct_docs_read_attributes_then_attribute_docstrings() -> None:
+    summary, docs = GEN.struct_docs(_Documented)
+    assert summary == "A table."
+    assert docs == {"a": ("s", "From the docstring."), "b": ("", "From an attribute docstring.")}
 
 
 def test_docstring_entries_parse_units_and_continuations() -> None:
