@@ -17,8 +17,10 @@ its PID when the guide is done, whatever happened.
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
+import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -221,14 +223,7 @@ class Session:
             for line in lines
         )
         command = "; ".join(lines)
-        done = subprocess.run(
-            ["bash", "-e", "-c", script],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=300,
-            check=False,
-        )
+        done = _run(["bash", "-e", "-c", script])
         self.log.append(f"$ {command}  -> {done.returncode}")
         if done.returncode != block.directives.exit:
             raise GuideError(
@@ -240,14 +235,7 @@ class Session:
     def _python(self, block: Block) -> None:
         program = self.tmp / f"block-{block.line}.py"
         program.write_text(self.substitute(block.text), encoding="utf-8")
-        done = subprocess.run(
-            [sys.executable, str(program)],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=300,
-            check=False,
-        )
+        done = _run([sys.executable, str(program)])
         self.log.append(f"python block {block.where} -> {done.returncode}")
         if done.returncode != block.directives.exit:
             raise GuideError(
@@ -262,6 +250,28 @@ class Session:
         """End every background process by its PID, newest first."""
         for child in reversed(self.background):
             child.stop()
+
+
+def _run(argv: list[str], timeout: float = 300.0) -> subprocess.CompletedProcess[str]:
+    """Run a foreground command in its own process group; on a time-out the whole group (the
+    command and what it started) is killed by its id."""
+    proc = subprocess.Popen(
+        argv,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        raise GuideError(
+            f"`{argv[-1]}` ran over {timeout} s\n{out[-2000:]}\n{err[-2000:]}"
+        ) from None
+    return subprocess.CompletedProcess(argv, proc.returncode, out, err)
 
 
 def run_guide(path: Path, port: int, tmp: Path) -> Iterator[Block]:
