@@ -35,6 +35,63 @@ Example (``configs/agents/pick.toml``)::
 Strict: an unknown key is an error that names the file and the field (``$.robot.lable``).
 Relative paths (skill files, ``event_log``, ``ontology``) are relative to the config file.
 Pure: no network, nothing blocks except reading the file.
+
+Keys (of the skill-description wire structs a ``[[services]]`` entry's ``description`` holds;
+``scripts/gen_reference.py`` reads them for the agent-config reference):
+    SkillDescription.name: The skill's name (what task files and plans call).
+    SkillDescription.version: Version of the description, shown to people.
+    SkillDescription.doc: What the skill does, for people.
+    SkillDescription.parameters: The skill's parameters.
+    SkillDescription.pre: Pre-conditions: must hold for the skill to start.
+    SkillDescription.timeout (s): Longest run; none: no limit.
+    ParamSpec.name: Parameter name.
+    ParamSpec.type: An ontology class (an element parameter) or a value kind (``float``,
+        ``int``, ``bool``, ``str``, ``Pose``, ``Position``, ...).
+    ParamSpec.kind: ``online`` (the objects acted on), ``offline`` (configuration with
+        defaults) or ``hardware`` (devices of the robot, locked while the skill runs).
+    ParamSpec.doc: What the parameter means, for people.
+    ParamSpec.default: Value used when none is given.
+    ParamSpec.optional: The run may start without a value (it is then none).
+    ParamSpec.partial: Narrows an element parameter further: label, property filters,
+        relations (``?`` = the candidate).
+    Query.type: Ontology class the element must have (or a subclass of it).
+    Query.exact_type: Only elements of exactly ``type``, not of a subclass.
+    Query.label: The element's label, if given.
+    Query.filters: Property filters the element must satisfy.
+    Query.related: Relations the element must take part in (``?`` = the element, ``*`` =
+        anything).
+    PropertyFilter.property: Data property name.
+    PropertyFilter.op: Comparison with ``value`` (``near``: within ``tolerance``).
+    PropertyFilter.value: The value compared with.
+    PropertyFilter.tolerance: Allowed difference for ``near``.
+    Relation.subject: Subject element (``?``: the element, ``*``: any).
+    Relation.predicate: Ontology relation, e.g. ``contain``.
+    Relation.object: Object element (``?``: the element, ``*``: any).
+    RelationCond.subject: Parameter name of the subject.
+    RelationCond.predicate: Ontology relation, e.g. ``contain``.
+    RelationCond.object: Parameter name of the object.
+    RelationCond.holds: False: the relation must not hold.
+    PropertyCond.param: Parameter name of the element.
+    PropertyCond.property: Data property name.
+    PropertyCond.op: Comparison with ``value`` (``exists``: the property is set).
+    PropertyCond.value: The value compared with.
+    PropertyCond.tolerance: Allowed difference for ``near``.
+    HasPropertyCond.param: Parameter name of the element.
+    HasPropertyCond.property: Data property name.
+    HasPropertyCond.holds: False: the element must not have the property.
+    IsTypeCond.param: Parameter name of the element.
+    IsTypeCond.cls: Ontology class the element must be (or a subclass of).
+    EmptyCond.param: Parameter name of the location, container or gripper.
+    EmptyCond.predicate: Relation that counts as holding something.
+    EmptyCond.holds: False: it must hold something.
+    EmptyCond.full: Instead: it holds as many things as its ``capacity`` allows.
+    IsSpecifiedCond.param: Parameter that must have a value.
+    CustomCond.name: Name of a condition class registered in the agent (``conditions``).
+    CustomCond.params: Parameter names passed to it.
+    CustomCond.args: Further arguments by name.
+    AndCond.items: Conditions that must all hold.
+    OrCond.items: Conditions of which one must hold.
+    NotCond.item: The condition that must not hold.
 """
 
 from __future__ import annotations
@@ -100,7 +157,7 @@ class DeviceConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fie
 
 
 class SkillsConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """SkillsConfig.
+    """Which skills the agent loads.
 
     Attributes:
         paths: ``pkg.mod:Class``, ``pkg.mod`` (every Skill subclass defined in it), or a file
@@ -133,7 +190,7 @@ class SimulationConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown
 
 
 class SensingConfig(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """SensingConfig.
+    """Defaults for sensing.
 
     Attributes:
         max_age (s): Default ``sensing_max_age`` for skills whose description sets none: sensing is
