@@ -277,7 +277,7 @@ def document(fmt: Format) -> Documented:
             overlay.setdefault(cls_name, {}).update(docs)
     units: dict[tuple[str, str], str] = {}
     missing: list[str] = []
-    defs: dict[str, Schema] = json.loads(json.dumps(components))
+    defs: dict[str, Schema] = _canonical(json.loads(json.dumps(components)))
     for name, schema in defs.items():
         cls = classes.get(name)
         if cls is None:
@@ -304,6 +304,25 @@ def document(fmt: Format) -> Documented:
                 units[(name, key)] = unit
                 prop["x-unit"] = unit
     return Documented(fmt, root.__name__, defs, units, missing)
+
+
+_BOUNDS = ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
+
+
+def _canonical(node: Any) -> Any:
+    """Bounds as written by the first equal ``Meta`` Python created (``typing`` caches equal
+    ``Annotated`` types, and ``Meta(ge=0) == Meta(ge=0.0)``), made independent of import
+    order: a whole-number bound is an integer."""
+    if isinstance(node, list):
+        return [_canonical(n) for n in node]
+    if not isinstance(node, dict):
+        return node
+    out = {k: _canonical(v) for k, v in node.items()}
+    for key in _BOUNDS:
+        value = out.get(key)
+        if isinstance(value, float) and value.is_integer():
+            out[key] = int(value)
+    return out
 
 
 def _tag_field(schema: Schema) -> str:
