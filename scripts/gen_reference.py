@@ -549,8 +549,9 @@ def _editor(fmt: Format, example: str) -> list[str]:
         "keys, shows these meanings on hover and marks unknown keys, wrong types and values out "
         "of range.",
         "",
-        "- **VS Code with Even Better TOML, or any editor using Taplo**: put a schema directive "
-        "on the first line of the file (a path relative to the file, or a URL):",
+        "- **VS Code with Even Better TOML, or any editor using Taplo (or Tombi)**: put a schema "
+        "directive at the top of the file, before any key (a path relative to the file, or a "
+        "URL):",
         "",
         "  ```toml",
         f"  #:schema {relative}",
@@ -566,7 +567,7 @@ def _editor(fmt: Format, example: str) -> list[str]:
         f'  path = "{schema}"',
         "  ```",
         "",
-        f"- **Taplo on the command line**: `taplo check --schema file://$PWD/{schema} {example}`.",
+        f"- **Taplo on the command line**: `taplo lint --schema file://$PWD/{schema} {example}`.",
         "",
         "The loader stays the authority: it also checks what a JSON Schema cannot say "
         "(references between elements, a sphere's one-element `size`, ...).",
