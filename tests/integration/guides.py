@@ -50,6 +50,8 @@ class Directives:
     """The reason the block is not run ('' = run it)."""
     ready: list[str] = field(default_factory=list)
     exit: int = 0
+    loads: str = ""
+    """A TOML block that must load as this config format (``scenario``, ``agent``, ``task``)."""
 
 
 @dataclass
@@ -88,6 +90,8 @@ def parse_directives(body: str, where: str) -> Directives:
                 raise GuideError(f"{where}: `ready` needs quoted texts: {part!r}")
         elif m := re.fullmatch(r"exit (\d+)", part):
             out.exit = int(m[1])
+        elif m := re.fullmatch(r"loads as (scenario|agent|task)", part):
+            out.loads = m[1]
         else:
             raise GuideError(f"{where}: unknown guide directive {part!r}")
     return out

@@ -7,13 +7,17 @@ physics), and ends every process it started by its PID."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from meshlink.testing import free_port
+from scenario import parse_scenario
+from skill_agent.runtime import parse_config
+from task_agent.taskfile import load_task_file
 
-from .guides import GUIDES, blocks, guide_files, run_guide, unclassified
+from .guides import GUIDES, Block, blocks, guide_files, run_guide, unclassified
 
 
 def test_every_block_of_every_guide_is_run_or_skipped_with_a_reason() -> None:
@@ -25,6 +29,21 @@ def test_the_guides_index_lists_every_guide() -> None:
     index = (GUIDES / "README.md").read_text(encoding="utf-8")
     missing = [p.name for p in guide_files() if f"({p.name})" not in index]
     assert not missing, f"docs/guides/README.md does not list {missing}"
+
+
+LOADERS: dict[str, Callable[..., object]] = {
+    "scenario": parse_scenario,
+    "agent": parse_config,
+    "task": load_task_file,
+}
+CONFIGS = [b for path in guide_files() for b in blocks(path) if b.directives.loads]
+
+
+@pytest.mark.parametrize("block", CONFIGS, ids=[b.where for b in CONFIGS])
+def test_the_guides_config_files_load(block: Block) -> None:
+    """A block marked ``<!-- guide: loads as FORMAT -->`` is a whole file of that format."""
+    assert block.info == "toml", f"{block.where}: only a toml block can load as a config"
+    LOADERS[block.directives.loads](block.text, source=block.where)
 
 
 RUNNABLE = [
