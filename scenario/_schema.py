@@ -41,6 +41,12 @@ places the child's bottom centre; without a parent it is in the world frame, on 
 
 Errors: :func:`load_scenario` raises :class:`ScenarioError` naming the file and the field path
 (``$.parts[3].size``) or, for a bad reference, the labels that exist.
+
+Keys (of :class:`~device_drivers.Pose2D`, the ``pose`` of robots and furniture;
+``scripts/gen_reference.py`` reads them for the scenario reference):
+    Pose2D.x (m): World x of the element's reference point.
+    Pose2D.y (m): World y of the element's reference point.
+    Pose2D.yaw (rad): Heading about +z, counter-clockwise from +x seen from above.
 """
 
 from __future__ import annotations
@@ -82,7 +88,14 @@ Vec3 = tuple[Coord, Coord, Coord]
 class Placement(Struct, frozen=True, forbid_unknown_fields=True):
     """Where an element stands: ``x``, ``y`` in its parent's frame (the world without a
     parent), ``z`` above the parent's support surface, ``yaw`` about +z; all of its bottom
-    centre."""
+    centre.
+
+    Attributes:
+        x (m): Along the parent's x axis (the world's without a parent).
+        y (m): Along the parent's y axis (the world's without a parent).
+        z (m): Height above the parent's support surface (the floor without a parent).
+        yaw (rad): Turn about +z, counter-clockwise seen from above.
+    """
 
     x: Coord = 0.0
     y: Coord = 0.0
@@ -95,14 +108,26 @@ class RobotEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     arm and gripper from MJCF files (``[robots.model.mjcf]``, :class:`~device_drivers.
     robot_spec.MjcfArm`; an empty table means Menagerie's UR5e + Robotiq 2F-85, relative file
     paths are resolved against the scenario file). Its devices are ``arm``, ``gripper`` and
-    ``base`` (world-model labels ``<name>-arm`` ...), plus any sensor mounted on it."""
+    ``base`` (world-model labels ``<name>-arm`` ...), plus any sensor mounted on it.
+
+    Attributes:
+        name: Robot name: world-model label of the robot, prefix of its device labels
+            (``<name>-arm``) and its key segment under ``devices/``.
+        type: Ontology class of the robot.
+        pose: Start pose of the base frame in the world: ``x``, ``y`` (m) of the point on the floor
+            under the base centre, ``yaw`` (rad, about +z; 0 = facing +x). Also the robot's home
+            location.
+        model: The robot model: base, arm and gripper dimensions, or arm and gripper from MJCF files
+            (``[robots.model.mjcf]``).
+        agent: Skill-agent config file of this robot (resolved against the scenario file); empty:
+            none.
+    """
 
     name: Label
     type: str = "MobileManipulator"
     pose: Pose2D = Pose2D()
     model: RobotSpec = RobotSpec()
     agent: str = ""
-    """Skill-agent config of this robot (resolved against the scenario file)."""
 
     def __post_init__(self) -> None:
         if self.model.name not in ("robot", self.name):
@@ -137,7 +162,16 @@ class DrawerSpec(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """The drawer of a ``cabinet`` furniture, right under its top: an open box on a slide
     joint that pulls out towards the cabinet's front (+x of its frame) by at most ``travel``,
     with a bar handle on its front panel, ``handle_standoff`` m out from the panel (room for a
-    finger behind it). ``height``: of the box, m. Built by :mod:`mujoco_sim.models`."""
+    finger behind it). ``height``: of the box, m. Built by :mod:`mujoco_sim.models`.
+
+    Attributes:
+        label: World-model label and MuJoCo body name of the drawer.
+        type: Ontology class of the drawer.
+        height (m): Height of the drawer box; it must fit under the cabinet's top.
+        travel (m): How far the drawer pulls out (at most 0.8 of the cabinet's depth).
+        handle_standoff (m): How far the handle bar stands out of the front panel (its centre).
+        rgba: Colour: red, green, blue, alpha, each 0..1.
+    """
 
     label: Label
     type: str = "Drawer"
@@ -151,20 +185,34 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
     """Fixed furniture or a location. ``size`` = footprint x, y and top height. Shapes:
     ``table`` (top and legs), ``shelf`` (top, lower board, sides), ``block`` (solid, e.g. a
     worktop), ``area`` (a floor marking with no collision: a station), ``cabinet`` (solid,
-    with a ``drawer`` under its top opening at its front, +x)."""
+    with a ``drawer`` under its top opening at its front, +x).
+
+    Attributes:
+        type: Ontology class, e.g. ``Station``, ``Shelf``, ``Table``, ``Worktop``, ``Cabinet``.
+        label: World-model label and MuJoCo body name.
+        pose: World pose of the footprint centre: ``x``, ``y`` (m) and ``yaw`` (rad, about +z). A
+            station's pose is where a robot parks to work there, and its ``yaw`` the direction the
+            robot faces when it does (0 = +x).
+        size (m): Footprint along x, along y (in the furniture's own frame) and top height.
+        shape: ``table`` (top and legs), ``shelf`` (top, lower board, sides), ``block`` (solid, e.g.
+            a worktop), ``area`` (a floor marking without collision: a station), ``cabinet`` (solid,
+            with a ``drawer`` under its top). Default: ``area`` for a Station, ``shelf`` for a
+            Shelf, ``table`` for a Table, ``cabinet`` for a Cabinet, else ``block``.
+        station: Label of the station (an ``area`` furniture) this furniture belongs to: the station
+            ``contain`` s it in the world model and everything on it is ``at`` that station for the
+            planner. Empty: none.
+        rgba: Colour: red, green, blue, alpha, each 0..1.
+        drawer: The drawer of a ``cabinet`` (only a cabinet has one).
+    """
 
     type: str
     label: Label
     pose: Pose2D = Pose2D()
     size: Size3
     shape: FurnitureShape | None = None
-    """Default: ``area`` for a Station, ``shelf`` for a Shelf, ``table`` for a Table, else
-    ``block``."""
     station: str = ""
-    """The station (an ``area`` furniture label) this belongs to: world-model ``contain``."""
     rgba: RGBA = (0.62, 0.50, 0.38, 1.0)
     drawer: DrawerSpec | None = None
-    """A ``cabinet``'s drawer (only a cabinet has one)."""
 
     @property
     def kind(self) -> FurnitureShape:
@@ -179,7 +227,23 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
 class ContainerEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """An open box (floor and four walls) or, ``closed``, a lidded box. ``size`` is outside
     x, y, z. A container on a robot's deck is carried rigidly; ``fixed`` ones never move; the
-    others are free bodies that can be grasped."""
+    others are free bodies that can be grasped.
+
+    Attributes:
+        type: Ontology class, e.g. ``PartBox``, ``KitBox``, ``Tray``, ``MealBox``.
+        label: World-model label and MuJoCo body name.
+        parent: What it stands on: a robot name (carried on its deck), a furniture or a container
+            label. Empty: the floor.
+        pose: Bottom centre in the parent's frame, on its support surface.
+        size (m): Outside extents x, y, z.
+        wall (m): Thickness of the floor and walls (and lid).
+        mass (kg): Mass of the empty container.
+        closed: A lidded box (e.g. a meal box): a thing to carry, with a grasp pose from its -x
+            side; it gets no location.
+        fixed: Welded where it stands: never moves, cannot be grasped (e.g. a part box on a shelf).
+            Otherwise a free body (or, on a robot's deck, carried rigidly).
+        rgba: Colour: red, green, blue, alpha, each 0..1.
+    """
 
     type: str
     label: Label
@@ -199,7 +263,19 @@ _SIZE_FIELDS = {"cylinder": "[radius, height]", "cuboid": "[x, y, z]", "sphere":
 
 class PartEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """A part: a free rigid body of one shape. ``size``: cylinder ``[radius, height]`` (axis
-    vertical), cuboid ``[x, y, z]``, sphere ``[radius]``."""
+    vertical), cuboid ``[x, y, z]``, sphere ``[radius]``.
+
+    Attributes:
+        type: Ontology class, e.g. ``Gear``, ``Shaft``, ``Bolt``.
+        label: World-model label and MuJoCo body name.
+        parent: What it lies on or in: a container, furniture or appliance label.
+        pose: Bottom centre in the parent's frame, on its support surface.
+        shape: Shape of the rigid body; decides what ``size`` holds.
+        size (m): cylinder: ``[radius, height]`` (axis vertical); cuboid: ``[x, y, z]``; sphere:
+            ``[radius]``.
+        mass (kg): Mass of the part.
+        rgba: Colour: red, green, blue, alpha, each 0..1.
+    """
 
     type: str
     label: Label
@@ -227,7 +303,28 @@ class PartEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
 class ApplianceEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """A microwave: a box with a cavity open at its front (+x of its frame) closed by a door
     hinged on a vertical edge, driven by a motor. ``size``: outside depth x, width y,
-    height z."""
+    height z.
+
+    Attributes:
+        type: Ontology class of the appliance.
+        label: World-model label, MuJoCo body name and device owner key segment (its door is
+            ``<label>-door``).
+        parent: Furniture label it stands on. Empty: the floor.
+        pose: Bottom centre in the parent's frame, on its support surface.
+        size (m): Outside depth x, width y, height z.
+        wall (m): Thickness of the walls.
+        hinge: Door hinge side, seen from the front.
+        door_open_angle (rad): Door angle when fully open.
+        door_speed (rad/s): Door speed of the motor.
+        door_motor: False: the door has no motor (the appliance cannot open it itself); it has a bar
+            handle on its outer face instead (0.08 m from the free edge, at mid height, 0.05 m out),
+            for an arm to swing it (``open_door`` of an arm).
+        heating_power (W): Heating power.
+        default_heating_time (s): What the ``start`` button heats for.
+        agent: Skill-agent config file of this appliance (resolved against the scenario file);
+            empty: none.
+        rgba: Colour: red, green, blue, alpha, each 0..1.
+    """
 
     type: str = "Microwave"
     label: Label
@@ -236,17 +333,11 @@ class ApplianceEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
     size: Size3 = (0.40, 0.50, 0.30)
     wall: Annotated[float, Meta(gt=0, le=0.1)] = 0.02
     hinge: Literal["left", "right"] = "left"
-    """Door hinge side, seen from the front."""
     door_open_angle: Annotated[float, Meta(gt=0.1, le=2.5)] = 1.75
     door_speed: Annotated[float, Meta(gt=0, le=10)] = 1.2
-    """Door speed of the motor, rad/s."""
     door_motor: bool = True
-    """False: the door has no motor (the appliance cannot open it itself); it has a bar handle
-    on its outer face instead (:data:`DOOR_HANDLE_INSET` from the free edge, at mid height,
-    :data:`DOOR_HANDLE_STANDOFF` out), for an arm to swing it (``open_door`` of an arm)."""
     heating_power: Annotated[float, Meta(ge=0, le=3000)] = 800.0
     default_heating_time: Annotated[float, Meta(gt=0, le=3600)] = 30.0
-    """What the ``start`` button heats for, s."""
     agent: str = ""
     rgba: RGBA = (0.85, 0.85, 0.88, 1.0)
 
@@ -254,29 +345,46 @@ class ApplianceEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
 class SensorEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """A camera (``kind = "camera"``: on a robot's camera site with ``mount``, or fixed at
     ``position`` looking at ``look_at``) or a smart platform (``kind = "platform"``: the
-    tactile top of the furniture ``surface``)."""
+    tactile top of the furniture ``surface``).
+
+    Attributes:
+        kind: ``camera``: detects objects in its field of view; ``platform``: a smart platform, the
+            tactile top of the furniture ``surface``.
+        label: World-model label of the sensor (a platform: the label of its furniture element).
+        type: Ontology class; default ``Camera`` or ``SmartPlatform``.
+        mount: Cameras: robot name for a robot-mounted camera; empty: fixed in the world at
+            ``position``.
+        site: Cameras on a robot: the robot's camera site it sits on.
+        position (m): Fixed cameras: world position x, y, z (required without ``mount``).
+        look_at (m): Fixed cameras: the world point x, y, z it looks at (required without
+            ``mount``).
+        surface: Platforms: label of the furniture whose top is the platform (required for a
+            platform).
+        fov (deg): Cameras: vertical field of view (the horizontal one follows from a 4:3 image).
+        range (m): Cameras: farthest distance at which objects are detected.
+        noise_std (m): Standard deviation of the Gaussian position noise per axis: cameras at 1 m
+            depth (it grows with depth), platforms in x and y.
+        rate (Hz): Cameras: image rate when images are recorded.
+        occlusion: Cameras: a part hidden behind another object (a ray from the camera to the part's
+            centre hits something else first) is not seen. Boxes and appliances are always seen.
+        device: Device key segment (``devices/<owner>/<device>``); default ``camera`` on a robot,
+            ``sensor`` for a fixed camera or a platform.
+    """
 
     kind: Literal["camera", "platform"]
     label: Label
     type: str = ""
-    """Ontology class; default ``Camera`` or ``SmartPlatform``."""
     mount: str = ""
-    """Robot name for a robot-mounted camera; empty: fixed in the world."""
     site: Literal["front_camera", "wrist_camera"] = "front_camera"
     position: Vec3 | None = None
     look_at: Vec3 | None = None
     surface: str = ""
     fov: Annotated[float, Meta(gt=0, lt=180)] = 60.0
-    """Vertical field of view, degrees (the horizontal one follows from a 4:3 image)."""
     range: Annotated[float, Meta(gt=0, le=50)] = 3.0
     noise_std: Annotated[float, Meta(ge=0, le=1)] = 0.004
-    """Standard deviation of the position noise at 1 m (cameras: grows with depth), m."""
     rate: Annotated[float, Meta(gt=0, le=100)] = 5.0
-    """Image rate when images are recorded, Hz."""
     occlusion: bool = True
-    """Cameras: an object hidden behind another one (ray test to its centre) is not seen."""
     device: Label | None = None
-    """Device key segment; default ``camera`` on a robot, ``sensor`` for a fixed one."""
 
     @property
     def owner(self) -> str:
@@ -294,17 +402,35 @@ class SensorEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True)
 
 class Scenario(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """A whole scenario. Build it with :func:`~scenario.load_scenario`
-    (checks references); constructing it directly checks only field types."""
+    (checks references); constructing it directly checks only field types.
+
+    Attributes:
+        name: Scenario name (``--scenario NAME`` finds ``configs/scenarios/NAME/scenario.toml``).
+        description: Free text shown to people.
+        floor_size (m): Half size of the square floor.
+        prior_noise (m): Rough prior knowledge (SkiROS): the standard deviation of the error in x
+            and y of the parts' initial world-model poses (the simulation places them exactly); each
+            part's error is drawn from its label, so a scene is the same every time. Sensing
+            (``locate``, which ``pick`` runs first) refines them. 0: the world model starts with the
+            exact poses.
+        robots: Mobile manipulators.
+        furniture: Stations, shelves, tables, worktops, cabinets.
+        containers: Part boxes, kit boxes, trays, meal boxes.
+        parts: Parts: free rigid bodies.
+        appliances: Appliances with a motorised (or handled) door: a microwave.
+        sensors: Cameras and smart platforms.
+        goals: Goal facts as text, e.g. ``contain(KitBox-1, Gear-1)``; ``!`` negates one. The task
+            layer parses them.
+        ontology: Turtle files with the scenario's own ontology terms (a new part type, a
+            relation, a data property, templates), relative to the scenario file; taught to the
+            world model's ontology, for the whole mesh, when the scene is loaded.
+        source: The file it was read from (set by the loader; leave it out).
+    """
 
     name: Label
     description: str = ""
     floor_size: Annotated[float, Meta(gt=1, le=100)] = 8.0
-    """Half size of the floor, m."""
     prior_noise: Annotated[float, Meta(ge=0, le=0.2)] = 0.0
-    """Rough prior knowledge (SkiROS): the standard deviation, m, of the error in x and y of the
-    parts' initial world-model poses (the simulation places them exactly); each part's error
-    is drawn from its label, so a scene is the same every time. Sensing (``locate``, which
-    ``pick`` runs first) refines them. 0: the world model starts with the exact poses."""
     robots: list[RobotEntry] = []
     furniture: list[FurnitureEntry] = []
     containers: list[ContainerEntry] = []
@@ -312,13 +438,8 @@ class Scenario(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     appliances: list[ApplianceEntry] = []
     sensors: list[SensorEntry] = []
     goals: list[str] = []
-    """Goal facts as text, e.g. ``contain(KitBox-1, Gear-1)``; the task layer parses them."""
     ontology: list[str] = []
-    """Turtle files with the scenario's own ontology terms (classes such as a new part type,
-    relations, data properties, templates), relative to the scenario file; taught to the
-    world model's ontology, for the whole mesh, when the scene is loaded."""
     source: str = ""
-    """The file it was read from (set by the loader)."""
 
     def robot(self, name: str) -> RobotEntry:
         for robot in self.robots:

@@ -16,6 +16,26 @@ explicit id).
 as it. Two calls are *ordered* (:func:`precedes`) when the innermost block holding both is a
 sequence: the one in the earlier child finishes before the other starts. When that block is a
 parallel one they are *concurrent*. Pure: no I/O except :func:`read_task_file`.
+
+Keys (of the wire structs in :mod:`task_agent.protocol`; ``scripts/gen_reference.py`` reads them
+for the task-file reference):
+    TaskFile.name: The task's name, shown in ``skimesh task`` listings and events.
+    TaskFile.root: The root block: ``block = "call"``, ``"sequence"`` or ``"parallel"``.
+    Call.block: ``"call"``: this block runs one skill.
+    Call.skill: Name of the skill to run (or its family, e.g. ``pick``).
+    Call.agent: Agent that runs it; empty: any agent offering ``skill``.
+    Call.params: Skill parameters by name: a value, an element id, ``"label:<label>"`` (the
+        element with that label) or ``"@<step id>.<param>"`` (the value an earlier step ran
+        with). Parameters left out are inferred when the step starts.
+    Call.id: Step id for ``@<id>.<param>`` references and messages; default: the block's path
+        (``root.1.0``).
+    Call.fallback_operator: If the skill fails, ask the operator to do it (semi-autonomy).
+    Sequence.block: ``"sequence"``: the children run one after the other.
+    Sequence.children: The child blocks, in order (``[[...children]]`` tables).
+    Sequence.id: Block id; default: the block's path.
+    Parallel.block: ``"parallel"``: the children run at the same time.
+    Parallel.children: The child blocks (``[[...children]]`` tables).
+    Parallel.id: Block id; default: the block's path.
 """
 
 from __future__ import annotations
