@@ -92,6 +92,13 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
       arm has other than six joints.
 
     A scenario resolves relative paths against its own file.
+
+    Attributes:
+        home (rad): Home posture in ``arm_joints`` order: skills pass through it between
+            tasks (one file: required unless the arm has six joints).
+        reach (m): Shoulder to tool centre point, stretched (the UR5e's 0.85 m plus the 2F-85).
+        attachment_site: Site of the arm's flange where the gripper is attached (two MJCF
+            files).
     """
 
     arm_xml: str = ""
@@ -113,11 +120,8 @@ class MjcfArm(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     one-file robot; default there: derived, the movable joints from ``base_link`` to
     ``tool_link``)."""
     home: tuple[float, ...] = UR5E_HOME
-    """Home posture, rad, in ``arm_joints`` order: skills pass through it between tasks."""
     reach: Annotated[float, Meta(gt=0, le=10)] = 1.0
-    """Shoulder to tool centre point, stretched, m (the UR5e's 0.85 m plus the 2F-85)."""
     attachment_site: str = "attachment_site"
-    """Site of the arm's flange where the gripper is attached."""
     tcp_site: str = "pinch"
     """Gripper site used as tool centre point: z along the approach, y along the closing axis
     (one file: default derived, a site ``tcp`` added between the finger pads)."""
@@ -234,56 +238,69 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
     gripper pointing down at 0.75 m height, up to 0.5 m beyond the front edge), and a parallel
     gripper opening to 85 mm. It picks a 4-6 cm part from a 0.7 m table in front and drops it
     into a kit box on the rear half of its deck.
+
+    Attributes:
+        name: Robot name; element names are prefixed ``<name>/``.
+        base_length (m): Footprint along the base x axis (forward).
+        base_width (m): Footprint along the base y axis.
+        base_height (m): Height of the deck (top of the base) above the floor.
+        base_mass (kg): Mass of the base.
+        base_max_speed (m/s): Fastest linear speed a velocity command (``MobileBase.set_velocity``)
+            drives at.
+        base_max_yaw_rate (rad/s): Fastest turn of a velocity command.
+        base_max_acceleration (m/s²): Linear acceleration of a velocity command (the yaw rate ramps
+            over the same time: it reaches its maximum when the speed reaches its own).
+        arm_dof: Joints of the generated arm: 6 (pan, lift, elbow, spherical wrist) or 7 (adds an
+            upper-arm roll).
+        arm_mount_x (m): Arm mount on the deck, along the base x axis from the base centre.
+        pedestal_height (m): Deck to the shoulder-pan joint.
+        shoulder_height (m): Shoulder-pan joint to the shoulder-lift axis.
+        upper_arm_length (m): Shoulder-lift axis to elbow axis.
+        forearm_length (m): Elbow axis to wrist centre (where the wrist axes meet).
+        wrist_length (m): Wrist centre to the gripper flange.
+        gripper_length (m): Gripper flange to the tool centre point (middle of the finger pads).
+        link_radius (m): Radius of the generated arm's links.
+        arm_mass (kg): Whole arm without gripper, spread over the links by length.
+        gripper_mass (kg): Mass of the generated gripper.
+        gripper_max_opening (m): Distance between the finger pads when fully open.
+        gripper_force (N): Largest squeeze force of each finger.
+        base_rgba: Colour of the base: red, green, blue, alpha, each 0..1.
+        deck_rgba: Colour of the deck: red, green, blue, alpha, each 0..1.
+        arm_rgba: Colour of the arm: red, green, blue, alpha, each 0..1.
+        gripper_rgba: Colour of the gripper: red, green, blue, alpha, each 0..1.
+        pad_rgba: Colour of the finger pads: red, green, blue, alpha, each 0..1.
+        mjcf: Arm and gripper from files (MJCF, or one URDF) instead of the generated ones
+            (then the arm and gripper fields above are unused, except ``gripper_max_opening``
+            and ``gripper_force``, the rated opening and squeeze force of the file's gripper).
     """
 
     name: RobotName = "robot"
-    """Robot name; element names are prefixed ``<name>/``."""
     base_length: Length = 0.60
-    """Footprint along the base x axis (forward), m."""
     base_width: Length = 0.45
-    """Footprint along the base y axis, m."""
     base_height: Length = 0.35
-    """Height of the deck (top of the base) above the floor, m."""
     base_mass: Mass = 40.0
     base_max_speed: Annotated[float, Meta(gt=0, le=5)] = 1.0
-    """Fastest linear speed a velocity command (``MobileBase.set_velocity``) drives at, m/s."""
     base_max_yaw_rate: Annotated[float, Meta(gt=0, le=10)] = 1.0
-    """Fastest turn of a velocity command, rad/s."""
     base_max_acceleration: Annotated[float, Meta(gt=0, le=20)] = 1.0
-    """Linear acceleration of a velocity command, m/s² (the yaw rate ramps over the same
-    time: it reaches its maximum when the speed reaches its own)."""
     arm_dof: Literal[6, 7] = 6
     arm_mount_x: Annotated[float, Meta(ge=-5, le=5)] = 0.17
-    """Arm mount on the deck, along the base x axis from the base centre, m."""
     pedestal_height: Length = 0.20
-    """Deck to the shoulder-pan joint, m."""
     shoulder_height: Length = 0.10
-    """Shoulder-pan joint to the shoulder-lift axis, m."""
     upper_arm_length: Length = 0.38
-    """Shoulder-lift axis to elbow axis, m."""
     forearm_length: Annotated[float, Meta(ge=0.1, le=10)] = 0.32
-    """Elbow axis to wrist centre (where the wrist axes meet), m."""
     wrist_length: Annotated[float, Meta(ge=0.04, le=1)] = 0.07
-    """Wrist centre to the gripper flange, m."""
     gripper_length: Annotated[float, Meta(ge=0.07, le=1)] = 0.11
-    """Gripper flange to the tool centre point (middle of the finger pads), m."""
     link_radius: Length = 0.035
     arm_mass: Mass = 3.5
-    """Whole arm without gripper, spread over the links by length."""
     gripper_mass: Annotated[float, Meta(ge=0.15, le=100)] = 0.6
     gripper_max_opening: Length = 0.085
-    """Distance between the finger pads when fully open, m."""
     gripper_force: Annotated[float, Meta(gt=0, le=500)] = 40.0
-    """Largest squeeze force of each finger, N."""
     base_rgba: RGBA = (0.25, 0.27, 0.30, 1.0)
     deck_rgba: RGBA = (0.55, 0.57, 0.60, 1.0)
     arm_rgba: RGBA = (0.90, 0.55, 0.10, 1.0)
     gripper_rgba: RGBA = (0.20, 0.20, 0.22, 1.0)
     pad_rgba: RGBA = (0.10, 0.60, 0.30, 1.0)
     mjcf: MjcfArm | None = None
-    """Arm and gripper from files (MJCF or URDF) instead of the generated ones (then the arm and
-    gripper fields above are unused, except ``gripper_max_opening`` and ``gripper_force``, the rated
-    opening and squeeze force of the file's gripper)."""
 
     @property
     def prefix(self) -> str:
