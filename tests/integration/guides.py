@@ -183,6 +183,7 @@ class Session:
         ready = list(block.directives.ready)
         script: list[str] = []  # consecutive foreground commands run as one script
         for command in commands(block.text):
+            command = re.sub(r"\s&\s+#.*$", " &", command)  # `cmd &  # comment`
             if command.endswith("&") and not command.endswith("&&"):
                 if script:
                     self._shell(block, script)
