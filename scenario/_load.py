@@ -196,7 +196,7 @@ def check_scenario(s: Scenario) -> None:
         elif sensor.position is None or sensor.look_at is None:
             fail(f"{where}: a fixed camera needs position and look_at (or mount = a robot)")
     keys = [(x.owner, x.device_name) for x in s.sensors]
-    keys += [(r.name, d) for r in s.robots for d in ("arm", "gripper", "base")]
+    keys += [(r.name, d) for r in s.robots for d in r.spec.devices]
     for owner, device in keys:
         if keys.count((owner, device)) > 1:
             fail(f"$.sensors: two devices are {owner}/{device}; set `device` to tell them apart")
@@ -214,7 +214,7 @@ def _all_labels(s: Scenario) -> list[tuple[str, str]]:
     found: list[tuple[str, str]] = []
     for i, r in enumerate(s.robots):
         found.append((f"$.robots[{i}].name", r.name))
-        found += [(f"$.robots[{i}] (device)", f"{r.name}-{d}") for d in ("arm", "gripper", "base")]
+        found += [(f"$.robots[{i}] (device)", f"{r.name}-{d}") for d in r.spec.devices]
     found += [(f"$.furniture[{i}].label", f.label) for i, f in enumerate(s.furniture)]
     found += [
         (f"$.furniture[{i}].drawer.label", f.drawer.label)
