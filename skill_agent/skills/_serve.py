@@ -17,7 +17,6 @@ from skill_agent.skills._params import (
     contains,
     door_is,
     empty,
-    is_not,
     not_full,
     offline,
 )
@@ -73,7 +72,6 @@ class PlaceAt(Place):
         ],
         pre=[
             contains("gripper", "object"),
-            is_not("container", Cls.Appliance),
             at("robot", "location"),
             at("container", "location"),
             not_full("container"),

@@ -1,8 +1,8 @@
 """Fixed robots in the simulation: an arm on a pedestal bolted to the floor (``[robots.model]
 mount = "fixed"``), no base. The shipped ``panda-cell`` scenario (a Franka Panda from the
-example-robot-data URDF) and the same cell with the generated arm: the world serves arm and
-gripper only, and the shipped skills pick a gear from the part box and place it into the kit box
-on the same table (``place_at``); the physics confirms it arrived."""
+example-robot-data URDF) and the same cell with the generated arm: the world serves arm,
+gripper and wrist camera only, and the shipped skills pick a gear from the part box and place
+it into the kit box on the same table (``place_at``); the physics confirms it arrived."""
 
 from __future__ import annotations
 
@@ -56,8 +56,9 @@ async def sim(request: pytest.FixtureRequest) -> AsyncIterator[Sim]:
         tg.cancel_scope.cancel()
 
 
-async def test_a_fixed_arm_serves_arm_and_gripper_only(sim: Sim) -> None:
-    assert set(sim_devices(sim.world, "c1")) == {("c1", "arm"), ("c1", "gripper")}
+async def test_a_fixed_robot_has_no_base(sim: Sim) -> None:
+    devices = {("c1", "arm"), ("c1", "gripper"), ("c1", "camera")}  # its wrist camera
+    assert set(sim_devices(sim.world, "c1")) == devices
     assert "c1-base" not in sim.ids
     model = sim.world.plant.model
     assert all(not model.joint(j).name.startswith("c1/base") for j in range(model.njnt))
