@@ -1,5 +1,5 @@
 """Fixed robots in the simulation: an arm on a pedestal bolted to the floor (``[robots.model]
-mount = "fixed"``), no base. The shipped ``panda-cell`` scenario (a Franka Panda from the
+mount = "fixed"``), no base. The shipped ``kitting-cell`` scenario (a Franka Panda from the
 example-robot-data URDF) and the same cell with the generated arm: the world serves arm,
 gripper and wrist camera only, and the shipped skills pick a gear from the part box and place
 it into the kit box on the same table (``place_at``); the physics confirms it arrived."""
@@ -26,12 +26,12 @@ from wm_store.server import WmService, WmStore
 pytest.importorskip("cmeel", reason="needs example-robot-data: pip install example-robot-data")
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 
-SCENARIO = Path(__file__).resolve().parents[2] / "configs/scenarios/panda-cell/scenario.toml"
+SCENARIO = Path(__file__).resolve().parents[2] / "configs/scenarios/kitting-cell/scenario.toml"
 CELL = (Locate, Pick, PlaceAt)
 
 
 def generated_cell() -> Scenario:
-    """The panda-cell with the generated 6-joint arm on the pedestal (its shoulder 0.55 m
+    """The kitting-cell with the generated 6-joint arm on the pedestal (its shoulder 0.55 m
     high, as on the mobile base)."""
     scenario = load_scenario(SCENARIO)
     [robot] = scenario.robots

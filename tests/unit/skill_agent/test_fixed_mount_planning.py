@@ -1,4 +1,4 @@
-"""Planning for a fixed robot: the shipped ``panda-cell`` scenario (a Panda on a pedestal, no
+"""Planning for a fixed robot: the shipped ``kitting-cell`` scenario (a Panda on a pedestal, no
 base) registers arm and gripper only, its agent offers no ``navigate``, and the real planner
 reaches the scenario's goals with pick and place_at, without a single navigate step: the robot
 and both boxes are ``at`` its home."""
@@ -21,7 +21,7 @@ from wm_store.protocol import AddElement
 from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
-SCENARIO = ROOT / "configs" / "scenarios" / "panda-cell" / "scenario.toml"
+SCENARIO = ROOT / "configs" / "scenarios" / "kitting-cell" / "scenario.toml"
 
 
 @pytest.fixture
@@ -44,7 +44,7 @@ def test_the_scene_of_a_fixed_robot_has_no_base() -> None:
 
 
 def test_the_fixed_robots_agent_offers_no_navigate() -> None:
-    config = load_config(ROOT / "configs" / "agents" / "panda-cell" / "c1.toml")
+    config = load_config(ROOT / "configs" / "agents" / "kitting-cell" / "c1.toml")
     entries = SkillRegistry.from_config(config, Ontology.default()).load()
     config.check_skill_names(entries)
     assert {e.description.name for e in entries.values()} == {"locate", "pick", "place_at"}
@@ -54,7 +54,7 @@ def test_the_fixed_robots_agent_offers_no_navigate() -> None:
 @pytest.mark.anyio
 async def test_the_cell_goals_are_planned_without_navigate(wm: WmClient) -> None:
     goals = " and ".join(load_scenario(SCENARIO).goals)
-    plan = await plan_scenario(wm, "panda-cell", ["panda-cell/c1"], goals)
+    plan = await plan_scenario(wm, "kitting-cell", ["kitting-cell/c1"], goals)
     skills = [s.skill for s in plan.steps]
     assert skills.count("pick") == 2 and skills.count("place_at") == 2
     assert "navigate" not in skills
