@@ -97,13 +97,19 @@ class Plant:
             name, spec = robot.name, robot.spec
             welds = {label: m.equality(weld_name(name, label)).id for label in graspable}
             grasping = Grasping(m, d, robot_layout(spec), graspable, welds, grasp)
-            base = BaseController((name, "base"), f"{name}-base", m, d, spec, obstacles)
             hand = GripperController(
                 (name, "gripper"), f"{name}-gripper", d, drives[name], grasping
             )
-            arm = ArmController((name, "arm"), f"{name}-arm", m, d, spec, hand, base)
-            for ctrl, kind in ((arm, "arm"), (hand, "gripper"), (base, "base")):
-                self._add(ctrl, kind)  # type: ignore[arg-type]
+            self._add(hand, "gripper")
+            if spec.fixed:  # no base device; the arm's tracker stands where the robot stands
+                arm = ArmController(
+                    (name, "arm"), f"{name}-arm", m, d, spec, hand, None, at=robot.pose
+                )
+            else:
+                base = BaseController((name, "base"), f"{name}-base", m, d, spec, obstacles)
+                arm = ArmController((name, "arm"), f"{name}-arm", m, d, spec, hand, base)
+                self._add(base, "base")
+            self._add(arm, "arm")
         objects = self.facts.objects
         movable = {k: v for k, v in objects.items() if v.kind != "appliance"}
         for a in scenario.appliances:

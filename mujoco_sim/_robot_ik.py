@@ -40,9 +40,10 @@ class WorldIK:
         self._solvers: dict[str, tuple[PlacoIK, DlsIK]] = {}
         for robot in scenario.robots:
             spec = robot.spec
+            at = robot.pose if spec.fixed else None  # a fixed robot's base frame is its pose
             self._solvers[robot.name] = (
-                PlacoIK.for_robot(spec, _OPTIONS),
-                DlsIK.for_robot(spec, _OPTIONS),
+                PlacoIK.for_robot(spec, _OPTIONS, at=at),
+                DlsIK.for_robot(spec, _OPTIONS, at=at),
             )
         self._limiters = {r.name: anyio.CapacityLimiter(1) for r in scenario.robots}
 

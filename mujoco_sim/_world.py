@@ -364,8 +364,8 @@ class SimWorld:
             UnreachableError: neither solver converged (the smaller residual is reported).
         """
         arm = self.plant.controllers[(robot, "arm")]
-        base = self.plant.controllers[(robot, "base")]
-        q0 = {**self._setpoints(base), **self._setpoints(arm)}
+        base = self.plant.controllers.get((robot, "base"))  # none: a fixed robot
+        q0 = {**(self._setpoints(base) if base else {}), **self._setpoints(arm)}
         return await self._ik.solve(robot, q0, target, whole_body=whole_body)
 
     def _setpoints(self, ctrl: Any) -> dict[str, float]:

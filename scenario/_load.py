@@ -3,7 +3,8 @@
 :func:`load_scenario` parses TOML into a :class:`~scenario.Scenario` (field
 types and ranges, unknown keys refused) and then checks what types cannot: labels unique,
 parents and mounts that exist and may hold the child, no container cycles, sensors complete,
-goals well formed and naming known labels. Agent config paths become absolute.
+a fixed robot neither a MobileManipulator nor carrying anything, goals well formed and naming
+known labels. Agent config paths become absolute.
 
 :func:`read_scenario` finds a scenario by name in a directory of scenarios
 (``<scenarios>/NAME/scenario.toml``) or takes a file; :func:`known_scenarios` lists the names.
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 import difflib
 import tomllib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import msgspec
@@ -175,6 +176,7 @@ def check_scenario(s: Scenario) -> None:
                 fail(f"$.containers[{i}].parent: containers form a cycle {' -> '.join(chain)}")
             chain.append(parent)
             parent = containers[parent].parent
+    _check_fixed_robots(s, fail)
     for i, p in enumerate(s.parts):
         if p.parent not in set(furniture) | set(containers) | appliances:
             fail(
@@ -196,7 +198,7 @@ def check_scenario(s: Scenario) -> None:
         elif sensor.position is None or sensor.look_at is None:
             fail(f"{where}: a fixed camera needs position and look_at (or mount = a robot)")
     keys = [(x.owner, x.device_name) for x in s.sensors]
-    keys += [(r.name, d) for r in s.robots for d in ("arm", "gripper", "base")]
+    keys += [(r.name, d) for r in s.robots for d in r.spec.devices]
     for owner, device in keys:
         if keys.count((owner, device)) > 1:
             fail(f"$.sensors: two devices are {owner}/{device}; set `device` to tell them apart")
@@ -210,11 +212,32 @@ def check_scenario(s: Scenario) -> None:
                 fail(_unknown(f"$.goals[{i}]", arg, "labels", seen))
 
 
+def _check_fixed_robots(s: Scenario, fail: Callable[[str], None]) -> None:
+    """A fixed robot (``model.mount = "fixed"``) has no base: it is no MobileManipulator,
+    carries no container (no deck) and has no front camera."""
+    fixed = {r.name for r in s.robots if r.spec.fixed}
+    for i, r in enumerate(s.robots):
+        if r.name in fixed and r.type == "MobileManipulator":
+            fail(
+                f'$.robots[{i}].type: a fixed robot (model.mount = "fixed") has no MobileBase, '
+                'so it is no MobileManipulator; e.g. type = "Robot"'
+            )
+    for i, c in enumerate(s.containers):
+        if c.parent in fixed:
+            fail(
+                f"$.containers[{i}].parent: {c.parent!r} is fixed and has no deck; put the "
+                "container on furniture within its reach"
+            )
+    for i, sensor in enumerate(s.sensors):
+        if sensor.kind == "camera" and sensor.mount in fixed and sensor.site == "front_camera":
+            fail(f'$.sensors[{i}].site: fixed robot {sensor.mount!r} has only "wrist_camera"')
+
+
 def _all_labels(s: Scenario) -> list[tuple[str, str]]:
     found: list[tuple[str, str]] = []
     for i, r in enumerate(s.robots):
         found.append((f"$.robots[{i}].name", r.name))
-        found += [(f"$.robots[{i}] (device)", f"{r.name}-{d}") for d in ("arm", "gripper", "base")]
+        found += [(f"$.robots[{i}] (device)", f"{r.name}-{d}") for d in r.spec.devices]
     found += [(f"$.furniture[{i}].label", f.label) for i, f in enumerate(s.furniture)]
     found += [
         (f"$.furniture[{i}].drawer.label", f.drawer.label)

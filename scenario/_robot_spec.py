@@ -1,4 +1,4 @@
-"""Configuration of the embedded mobile manipulator and the names of its parts.
+"""Configuration of the embedded manipulator (mobile or fixed) and the names of its parts.
 
 Pure data: no MuJoCo import. :class:`RobotSpec` is what a scenario file sets (strict: unknown
 fields are an error, lengths must be positive); :func:`robot_layout` derives every element
@@ -12,8 +12,12 @@ A spec with ``mjcf`` set keeps the generated base but takes its arm and gripper 
 :mod:`mujoco_sim.models`): arm elements are then named ``r1/<name in the file>`` and
 gripper elements ``r1/gripper/<name in the file>``; :func:`robot_layout` spells those too.
 
+A spec with ``mount = "fixed"`` has no base: its arm (generated or from files) stands on a
+pedestal fixed on the floor at the robot's pose, ``arm_mount_x`` ahead of it, the arm's mount
+``stand_height`` above the floor. Its layout has no base joints and no deck.
+
 Units: metres, kilograms, radians. Frames: the base frame has x forward, y left, z up, origin
-on the floor under the base centre.
+on the floor under the base centre (a fixed robot: its pose on the floor).
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from __future__ import annotations
 from typing import Annotated, Literal, TypeAlias
 
 from msgspec import Meta, Struct
+from msgspec.structs import replace
 
 __all__ = [
     "ARM_JOINTS_6",
@@ -37,6 +42,7 @@ __all__ = [
 Length = Annotated[float, Meta(gt=0, le=10, description="metres")]
 Mass = Annotated[float, Meta(gt=0, le=1000, description="kilograms")]
 Unit = Annotated[float, Meta(ge=0, le=1)]
+Mount = Literal["mobile", "fixed"]
 RGBA: TypeAlias = tuple[Unit, Unit, Unit, Unit]
 RobotName = Annotated[str, Meta(pattern=r"^[A-Za-z][A-Za-z0-9_-]*$", max_length=64)]
 
@@ -231,7 +237,7 @@ _DEFAULT_FILES = MjcfArm()
 
 
 class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
-    """A small holonomic mobile manipulator.
+    """A small holonomic mobile manipulator, or (``mount = "fixed"``) its arm on a pedestal.
 
     Defaults: a 0.60 x 0.45 m base whose deck (top) is 0.35 m above the floor, a 6-DOF arm whose
     shoulder is 0.65 m high above the front of the deck (reach shoulder → tcp 0.88 m; with the
@@ -300,6 +306,27 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
     arm_rgba: RGBA = (0.90, 0.55, 0.10, 1.0)
     gripper_rgba: RGBA = (0.20, 0.20, 0.22, 1.0)
     pad_rgba: RGBA = (0.10, 0.60, 0.30, 1.0)
+    mount: Annotated[
+        Mount,
+        Meta(
+            description="mobile: the arm on the generated holonomic base (a `base` device, "
+            "navigation); fixed: on a pedestal standing on the floor at the robot's pose "
+            "(no base, no navigation; base_* and the deck unused)"
+        ),
+    ] = "mobile"
+    """``"mobile"``: the arm on the generated base; ``"fixed"``: on a pedestal fixed on the
+    floor (no base device; the ``base_*`` fields, the deck and the front camera do not exist)."""
+    stand_height: Annotated[
+        float,
+        Meta(
+            gt=0,
+            le=3,
+            description="fixed mount: floor to the top of the pedestal, where the arm is "
+            "mounted (the generated arm's shoulder-pan joint), m",
+        ),
+    ] = 0.75
+    """Fixed mount: floor to the top of the pedestal (the arm's mount), m. The pedestal stands
+    ``arm_mount_x`` ahead of the robot's pose."""
     mjcf: MjcfArm | None = None
 
     @property
@@ -307,13 +334,29 @@ class RobotSpec(Struct, frozen=True, forbid_unknown_fields=True):
         """``<name>/``: the prefix of every element of this robot."""
         return f"{self.name}/"
 
+    @property
+    def fixed(self) -> bool:
+        """The arm stands on a fixed pedestal (``mount = "fixed"``): no base, no navigation."""
+        return self.mount == "fixed"
+
+    @property
+    def mount_height(self) -> float:
+        """Floor to the arm's mount (the generated arm's shoulder-pan joint), m."""
+        return self.stand_height if self.fixed else self.base_height + self.pedestal_height
+
+    @property
+    def devices(self) -> tuple[str, ...]:
+        """The robot's devices: ``arm``, ``gripper``, and ``base`` unless it is fixed."""
+        return ("arm", "gripper") if self.fixed else ("arm", "gripper", "base")
+
 
 class RobotLayout(Struct, frozen=True):
     """Full element names of one robot in a MuJoCo model (see :func:`robot_layout`)."""
 
     prefix: str
-    base_joints: tuple[str, str, str]
-    """x slide, y slide, yaw hinge; their values are the base pose in the world frame."""
+    base_joints: tuple[str, ...]
+    """x slide, y slide, yaw hinge; their values are the base pose in the world frame (none
+    for a fixed robot)."""
     arm_joints: tuple[str, ...]
     finger_joints: tuple[str, str]
     """Left and right finger joints (generated: slides, 0 = closed, each opening to
@@ -326,9 +369,11 @@ class RobotLayout(Struct, frozen=True):
     base_site: str
     """On the floor under the base centre, oriented like the base."""
     deck_site: str
-    """Centre of the free rear part of the deck, on its surface: where a kit box goes."""
+    """Centre of the free rear part of the deck, on its surface: where a kit box goes ("" for a
+    fixed robot)."""
     camera_sites: tuple[str, ...]
-    """Sites (and cameras) of the same name: front camera on the base, wrist camera."""
+    """Sites (and cameras) of the same name: front camera on the base (not on a fixed robot),
+    wrist camera."""
     pad_geoms: tuple[tuple[str, ...], tuple[str, ...]]
     """Left and right finger pad geoms (for "both pads touch" grasp checks)."""
     hand_body: str
@@ -346,6 +391,22 @@ def robot_layout(spec: RobotSpec, prefix: str | None = None) -> RobotLayout:
     """The names :func:`mujoco_sim.models.build_robot` gives robot ``spec.name``
     (with ``prefix``, default ``spec.prefix``)."""
     p = spec.prefix if prefix is None else prefix
+    layout = _mobile_layout(spec, p)
+    return _fixed_layout(layout) if spec.fixed else layout
+
+
+def _fixed_layout(layout: RobotLayout) -> RobotLayout:
+    """``layout`` without what only the mobile base has: base joints, deck, front camera."""
+    p = layout.prefix
+    return replace(
+        layout,
+        base_joints=(),
+        deck_site="",
+        camera_sites=tuple(c for c in layout.camera_sites if c != f"{p}front_camera"),
+    )
+
+
+def _mobile_layout(spec: RobotSpec, p: str) -> RobotLayout:
     if spec.mjcf is not None:
         return _mjcf_layout(spec.mjcf, p)
     arm = ARM_JOINTS_6 if spec.arm_dof == 6 else ARM_JOINTS_7

@@ -16,6 +16,8 @@
   (one segment after the other), else :class:`CollisionError` before anything moves.
 - Completion: set-points at the target, then the joints within 0.01 rad and slow; otherwise
   :class:`MotionTimeoutError` 2 s (simulated) after the trajectory's end.
+- A fixed robot (no base controller: :class:`NoBase`) moves its arm alone; its tracker's
+  model stands where the robot stands, so tool targets stay in the world frame.
 - A motion started while the gripper holds something fails with :class:`GraspLostError` as
   soon as the gripper no longer holds it (the arm halts).
 """
@@ -39,6 +41,7 @@ from device_drivers import (
     DeviceKey,
     GraspLostError,
     MotionTimeoutError,
+    Pose2D,
     UnreachableError,
 )
 from device_drivers.protocol import MoveJoints, MoveTcp
@@ -52,7 +55,7 @@ if TYPE_CHECKING:
     from mujoco_sim.control._base import BaseController
     from mujoco_sim.control._gripper import GripperController
 
-__all__ = ["ArmController"]
+__all__ = ["ArmController", "NoBase"]
 
 _JOINT_SPEED = 1.0  # peak joint speed of a default-duration move, rad/s
 _ANGULAR_SPEED = 1.0  # peak tool rotation speed of a straight move, rad/s
@@ -60,6 +63,20 @@ _SETTLE = 2.0  # s after the trajectory's end before MotionTimeoutError
 _TRACK_POS, _TRACK_ROT = 2e-3, 0.02  # tracker residual that hands a tick to the full solver
 _JUMP = 0.15  # largest set-point change per tick, rad: more means a branch flip
 _AHEAD = 25  # ticks of a straight move worked out at once (see ArmController._line)
+
+
+class NoBase:
+    """The base of a fixed robot: no joints, never busy (what :class:`ArmController` reads of
+    a :class:`~mujoco_sim.control.BaseController`)."""
+
+    def __init__(self) -> None:
+        self.acts = self.qadr = np.zeros(0, dtype=np.intp)
+        self.job: Job | None = None
+        self.owner = ""
+        self.label = "no base"
+
+    def hold(self) -> None:
+        """Nothing to hold."""
 
 
 class ArmController(Controller):
@@ -71,8 +88,12 @@ class ArmController(Controller):
         data: Any,
         spec: RobotSpec,
         gripper: GripperController,
-        base: BaseController,
+        base: BaseController | None,
+        *,
+        at: Pose2D | None = None,
     ) -> None:
+        """``base``: the robot's base controller (None: a fixed robot, built ``at`` its pose
+        for the tracker; whole-body motions then move the arm alone)."""
         super().__init__(key, label)
         self.m, self.d = model, data
         layout = robot_layout(spec)
@@ -84,8 +105,9 @@ class ArmController(Controller):
         self.dadr = np.array([model.jnt_dofadr[model.joint(j).id] for j in self.joints])
         self.range = np.array([model.jnt_range[model.joint(j).id] for j in self.joints])
         self.site = model.site(layout.tcp_site).id
-        self.gripper, self.base = gripper, base
-        self.tracker = TcpTracker(spec)
+        self.gripper = gripper
+        self.base: BaseController | NoBase = NoBase() if base is None else base
+        self.tracker = TcpTracker(spec, at=at)
         rest = spec.mjcf.home if spec.mjcf is not None else [0.0] * len(self.joints)
         self.router = JointRouter(self.tracker.model, layout, rest, label=label)
         self.fallback = self.router.ik  # on the tracker's model too: one private robot model
@@ -173,7 +195,7 @@ class ArmController(Controller):
         still = float(np.abs(self.d.qvel[self.dadr]).max()) < 0.05
         if self.base.owner == self.label:  # whole body: the base must be there too
             base_error = np.abs(self.d.qpos[self.base.qadr] - self.d.ctrl[self.base.acts])
-            still = still and float(base_error.max()) < 0.003
+            still = still and float(base_error.max(initial=0.0)) < 0.003
         if float(error.max()) < 0.01 and still:
             self.done(job)
         elif t - self.started_at > plan["T"] + _SETTLE:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, Self
 
+from device_drivers import Pose2D
 from mujoco_sim.ik._core import IKOptions
 from mujoco_sim.models._robot import build_robot
 from scenario import RobotSpec, robot_layout
@@ -35,12 +36,15 @@ class ChainSolver:
         self.base_joints = tuple(base_joints)
 
     @classmethod
-    def for_robot(cls, spec: RobotSpec, options: IKOptions | None = None) -> Self:
-        """A solver for a scenario robot, generated or with an MJCF arm (built alone; its base
-        joints are world coordinates)."""
+    def for_robot(
+        cls, spec: RobotSpec, options: IKOptions | None = None, *, at: Pose2D | None = None
+    ) -> Self:
+        """A solver for a scenario robot, generated or with an MJCF arm (built alone; a mobile
+        robot's base joints are world coordinates; a fixed robot is built where it stands,
+        ``at`` its pose)."""
         names = robot_layout(spec)
         return cls(
-            build_robot(spec),
+            build_robot(spec, at=at),
             tcp_site=names.tcp_site,
             arm_joints=names.arm_joints,
             base_joints=names.base_joints,

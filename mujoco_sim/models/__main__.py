@@ -1,5 +1,5 @@
 """``python -m mujoco_sim.models SCENARIO``: build each robot of a scenario alone and print what
-was derived (names, chain, tool frame, gripper). A robot file problem prints its
+was derived (mount, names, chain, tool frame, gripper). A robot file problem prints its
 :class:`~scenario.RobotFileError` (the file, what is missing, the key to set) and exits 1."""
 
 from __future__ import annotations
@@ -31,6 +31,10 @@ def main(argv: list[str]) -> int:
             mujoco.mj_forward(model, data)
             act = model.actuator(names.gripper_actuator).id
             site = model.site(names.tcp_site).id
+            print(
+                f"  mount {spec.mount}: the arm's mount {spec.mount_height:.3f} m above the floor"
+                + (f", devices {spec.devices} (no base)" if spec.fixed else "")
+            )
             print(f"  arm joints: {names.arm_joints}")
             body = model.body(model.site_bodyid[site]).name
             pos, quat = np.round(model.site_pos[site], 4), np.round(model.site_quat[site], 4)

@@ -20,6 +20,10 @@ value 0 the arm points straight up. Each base and arm joint has a position servo
 ``r1/gripper`` servos the pad-to-pad opening (m) through a fixed tendon, and an equality keeps
 the fingers symmetric. The world places a robot by the ``ref`` of its base joints, so base joint
 values are absolute world coordinates and :func:`mujoco.mj_resetData` puts it at its pose.
+
+A fixed robot (``mount = "fixed"``) has no ``base_x`` / ``base_y`` / ``base_yaw``: its body
+``r1/base`` stands in the world at the robot's pose, without joints, and carries the pedestal
+(geom ``r1/pedestal``, ``stand_height`` high) with the arm on top.
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ __all__ = ["TIMESTEP", "build_robot", "build_world", "configure_physics"]
 
 _CLEARANCE = 0.04  # chassis bottom above the floor, m
 _WHEEL_RADIUS = 0.06
+_STAND_RADIUS = 0.08  # fixed mount: the pedestal's radius, m
 _WRIST_ROLL_OFFSET = 0.05  # wrist-roll joint before the wrist centre, m
 _TOOL_ROLL_OFFSET = 0.03  # tool-roll body origin after the wrist centre, m
 
@@ -81,11 +86,12 @@ def build_robot(
 
     ``prefix`` starts every element name (default ``spec.prefix``, i.e. ``"<name>/"``). ``at``
     is the initial base pose in the world frame (default: the origin); it becomes the ``ref``
-    of the base joints, so that joint values stay absolute world coordinates. Export the robot
-    for IK with ``at=None``. With ``spec.mjcf`` the arm and gripper come from MJCF files,
-    attached at the site ``<prefix>arm_mount`` on top of the pedestal
-    (:func:`mujoco_sim.models.add_mjcf_arm`). Raises :class:`ModelError` if the spec does
-    not compile.
+    of the base joints, so that joint values stay absolute world coordinates. Export a mobile
+    robot for IK with ``at=None``; a fixed one (``spec.mount = "fixed"``: a pedestal body
+    ``<prefix>base`` without joints) at its pose, where its pedestal stands in the world.
+    With ``spec.mjcf`` the arm and gripper come from files, attached at the site
+    ``<prefix>arm_mount`` on top of the pedestal (:func:`mujoco_sim.models.add_mjcf_arm`).
+    Raises :class:`ModelError` if the spec does not compile.
     """
     mj = mujoco.MjSpec()
     mj.modelname = spec.name
@@ -98,9 +104,9 @@ def build_robot(
 def _add_robot(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> None:
     """Add robot ``spec`` with element prefix ``p`` at base pose ``at`` to ``mj``."""
     names = robot_layout(spec, p)
-    base = _add_base(mj, spec, p, at)
+    base = _add_stand(mj, spec, p, at) if spec.fixed else _add_base(mj, spec, p, at)
+    top = spec.mount_height
     if spec.mjcf is not None:
-        top = spec.base_height + spec.pedestal_height
         base.add_site(name=f"{p}arm_mount", pos=[spec.arm_mount_x, 0, top], size=[0.02, 0, 0])
         for jname in names.base_joints:
             _add_servo(mj, jname, jname.removeprefix(p))
@@ -111,7 +117,6 @@ def _add_robot(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> None:
         return
 
     # Arm: link lengths along +z at joint value 0.
-    top = spec.base_height + spec.pedestal_height
     link = base.add_body(name=f"{p}shoulder_link", pos=[spec.arm_mount_x, 0, top])
     chain = [link]
     _joint(link, f"{p}shoulder_pan", [0, 0, 1])
@@ -167,6 +172,30 @@ def _add_base(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> mujoco.
     base.add_joint(name=f"{p}base_yaw", type=_HINGE, axis=[0, 0, 1], ref=at.yaw, limited=free)
     _add_chassis(base, spec, p)
     return base
+
+
+def _add_stand(mj: mujoco.MjSpec, spec: RobotSpec, p: str, at: Pose2D) -> mujoco.MjsBody:
+    """Fixed mount: a pedestal on the floor at ``at`` (no joints), ``arm_mount_x`` ahead of
+    it, ``stand_height`` high, on a foot plate; returns its body (the robot's base frame)."""
+    stand = mj.worldbody.add_body(name=f"{p}base", pos=[at.x, at.y, 0], quat=_yaw_quat(at.yaw))
+    h = spec.stand_height
+    stand.add_geom(
+        name=f"{p}pedestal",
+        type=_CYLINDER,
+        size=[_STAND_RADIUS, h / 2, 0],
+        pos=[spec.arm_mount_x, 0, h / 2],
+        rgba=list(spec.base_rgba),
+        mass=20.0,
+    )
+    stand.add_geom(  # the foot plate, bolted to the floor (visual)
+        type=_BOX,
+        size=[2 * _STAND_RADIUS, 2 * _STAND_RADIUS, 0.01],
+        pos=[spec.arm_mount_x, 0, 0.01],
+        rgba=list(spec.deck_rgba),
+        **_VISUAL,
+    )
+    stand.add_site(name=f"{p}base_site", pos=[0, 0, 0], size=[0.02, 0, 0])
+    return stand
 
 
 def _yaw_quat(yaw: float) -> list[float]:

@@ -8,8 +8,9 @@ Simulation). The full
 solvers still check the end pose before a motion starts (placo, then DLS as fallback) and take
 over when the tracker loses the path (:meth:`TcpTracker.step` reports the residual).
 
-The tracker owns a compiled model of the robot alone (base joints = world coordinates) and its
-own ``MjData``: use one instance per thread (the simulation thread).
+The tracker owns a compiled model of the robot alone (base joints = world coordinates; a fixed
+robot built where it stands) and its own ``MjData``: use one instance per thread (the
+simulation thread).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from device_drivers import Pose2D
 from mujoco_sim.models._robot import build_robot
 from mujoco_sim.motion._math import Array
 from scenario import RobotSpec, robot_layout
@@ -36,11 +38,11 @@ class TcpTracker:
     """Tool-path tracking for robot ``spec`` (see module doc). Vectors are ordered
     ``chain`` = base joints then arm joints (full names)."""
 
-    def __init__(self, spec: RobotSpec) -> None:
+    def __init__(self, spec: RobotSpec, *, at: Pose2D | None = None) -> None:
         layout = robot_layout(spec)
         self.chain = layout.base_joints + layout.arm_joints
         self.n_base = len(layout.base_joints)
-        self._model = build_robot(spec).compile()
+        self._model = build_robot(spec, at=at).compile()  # a fixed robot: where it stands
         self._data = mujoco.MjData(self._model)
         joints = [self._model.joint(name).id for name in self.chain]
         self._qadr = np.array([self._model.jnt_qposadr[j] for j in joints])

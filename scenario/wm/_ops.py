@@ -67,12 +67,12 @@ from scenario.wm._furnishings import (
 )
 from scenario.wm._parts import part_size, prior_error
 from scenario.wm._robots import (
-    DEVICES,
     arm_home,
     arm_reach,
     device_label,
     distance_to_footprint,
     home_label,
+    robot_devices,
 )
 from wm_store.ontology import Cls, Ontology, Prop, Rel
 from wm_store.protocol import (
@@ -137,7 +137,7 @@ class _Builder:
             pose = pose_at(r.pose.x, r.pose.y, 0.0, r.pose.yaw)
             self.add(Cls.Location, home_label(r.name), {Prop.pose: pose})
             self.add(r.type, r.name, {Prop.pose: pose})
-            for device, cls in DEVICES:
+            for device, cls in robot_devices(r):
                 props: dict[str, Value] = {}
                 if cls == Cls.Arm:
                     props[Prop.jointPositions] = list(arm_home(r))

@@ -20,6 +20,7 @@ __all__ = [
     "device_label",
     "distance_to_footprint",
     "home_label",
+    "robot_devices",
 ]
 
 REACH_FRACTION = 0.8
@@ -33,7 +34,13 @@ arm's ``jointPositions``: skills pass through it between a pick in front and a p
 HOME_7: tuple[float, ...] = (0.0, -0.7, 0.0, 1.7, 0.0, 2.1, 0.0)
 """The same for a 7-joint arm (``ARM_JOINTS_7``: an upper-arm roll after the shoulder)."""
 DEVICES = (("arm", Cls.Arm), ("gripper", Cls.Gripper), ("base", Cls.MobileBase))
-"""Each robot's devices: label suffix and class."""
+"""A mobile robot's devices: label suffix and class (:func:`robot_devices`: of one robot)."""
+
+
+def robot_devices(robot: RobotEntry) -> tuple[tuple[str, str], ...]:
+    """``robot``'s devices, label suffix and class: :data:`DEVICES`, without the base for a
+    fixed robot (``model.mount = "fixed"``)."""
+    return tuple((d, cls) for d, cls in DEVICES if d in robot.spec.devices)
 
 
 def device_label(robot: str, device: str) -> str:

@@ -16,7 +16,8 @@ module             skills (name: class)                             used by
 ``pick``           pick: :class:`Pick`, take_out: :class:`TakeOut`  arm robots
 ``place``          place: :class:`Place`, place_on (on a surface):  arm robots
                    :class:`PlaceOn`
-``serve``          serve: :class:`Serve`, put_in: :class:`PutIn`    arm robots
+``serve``          serve: :class:`Serve`, put_in: :class:`PutIn`,   arm robots
+                   place_at (into a box in reach): :class:`PlaceAt`
 ``doors``          open_door / close_door: :class:`ArmOpenDoor`,    arm robots (unpowered doors)
                    :class:`ArmCloseDoor`
 ``drawers``        open_drawer / close_drawer:                      arm robots
@@ -49,6 +50,7 @@ from skill_agent.skills._pick import Pick as Pick
 from skill_agent.skills._pick import TakeOut as TakeOut
 from skill_agent.skills._place import Place as Place
 from skill_agent.skills._place import PlaceOn as PlaceOn
+from skill_agent.skills._serve import PlaceAt as PlaceAt
 from skill_agent.skills._serve import PutIn as PutIn
 from skill_agent.skills._serve import Serve as Serve
 
@@ -69,6 +71,7 @@ __all__ = [
     "OperateStop",
     "Pick",
     "Place",
+    "PlaceAt",
     "PlaceOn",
     "PutIn",
     "Serve",
@@ -85,6 +88,7 @@ ALL_SKILLS = (
     PlaceOn,
     Serve,
     PutIn,
+    PlaceAt,
     ArmOpenDoor,
     ArmCloseDoor,
     ArmOpenDrawer,
@@ -100,6 +104,7 @@ ALL_SKILLS = (
 RUNTIME_ONLY: dict[str, tuple[str, ...]] = {
     "place": ("not full(container)",),
     "serve": ("not full(tray)",),
+    "place_at": ("not full(container)",),
 }
 """Conditions (as :func:`skill_agent.conditions.describe` writes them) the planner cannot see:
 room left in a container needs counting. Checked when the skill starts."""

@@ -1,5 +1,6 @@
 """Variants of ``place``: ``serve`` (onto a tray at the robot's location, FRIEND II's "serve the
-meal") and ``put_in`` (into an empty appliance through its open door, in and out along its
+meal"), ``place_at`` (into a container at the robot's location: a box on the table beside a
+fixed arm) and ``put_in`` (into an empty appliance through its open door, in and out along its
 front). They share :class:`~skill_agent.skills.Place`'s execution and honest checks."""
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from skill_agent.skills._place import DEVICES, TUNING, Place
 from skill_agent.skills._support import element_id, float_param, wm_of
 from wm_store.ontology import Cls
 
-__all__ = ["PutIn", "Serve"]
+__all__ = ["PlaceAt", "PutIn", "Serve"]
 
 
 class Serve(Place):
@@ -51,6 +52,36 @@ class Serve(Place):
         duration=4.0,
     )
     target_param = "tray"
+
+
+class PlaceAt(Place):
+    """Put the held object into a container at the robot's location, not carried by it (a box
+    on the table beside a fixed arm)."""
+
+    description = SkillDescription(
+        name="place_at",
+        skill_type="place",
+        doc="Put the held object down into a container within reach at the robot's location "
+        "(a box on a table beside the arm).",
+        parameters=[
+            OBJECT,
+            ParamSpec(name="container", type=Cls.Container, doc="where it goes"),
+            LOCATION,
+            *DEVICES,
+            *TUNING,
+        ],
+        pre=[
+            contains("gripper", "object"),
+            at("robot", "location"),
+            at("container", "location"),
+            not_full("container"),
+        ],
+        hold=[contains("gripper", "object")],
+        post=[contains("container", "object"), contains("gripper", "object", holds=False)],
+        duration=4.0,
+    )
+    success_probability = 0.95
+    target_param = "container"
 
 
 class PutIn(Place):
