@@ -260,6 +260,8 @@ class Session:
 def _run(argv: list[str], timeout: float = 300.0) -> subprocess.CompletedProcess[str]:
     """Run a foreground command in its own process group; on a time-out the whole group (the
     command and what it started) is killed by its id."""
+    # `python` in a guide is the interpreter running the tests (its environment's bin first)
+    path = os.pathsep.join([os.path.dirname(sys.executable), os.environ.get("PATH", "")])
     proc = subprocess.Popen(
         argv,
         cwd=ROOT,
@@ -267,6 +269,7 @@ def _run(argv: list[str], timeout: float = 300.0) -> subprocess.CompletedProcess
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        env=dict(os.environ, PATH=path),
     )
     try:
         out, err = proc.communicate(timeout=timeout)
