@@ -33,8 +33,10 @@ from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
 from ._errors import CorruptLogError as CorruptLogError
 from ._errors import DuplicateIdError as DuplicateIdError
+from ._errors import DuplicateLabelError as DuplicateLabelError
 from ._errors import ElementNotFoundError as ElementNotFoundError
 from ._errors import HistoryCompactedError as HistoryCompactedError
+from ._errors import NameConflictError as NameConflictError
 from ._errors import OntologyError as OntologyError
 from ._errors import PropertyValueError as PropertyValueError
 from ._errors import ProtocolError as ProtocolError
@@ -60,6 +62,7 @@ from ._replica import ReplicaStats as ReplicaStats
 from ._transport import InMemoryTransport as InMemoryTransport
 from ._transport import WmTransport as WmTransport
 from ._zenoh_transport import ZenohTransport as ZenohTransport
+from .scene._names import display_name as display_name
 
 __all__ = [
     "CardinalityError",
@@ -67,9 +70,11 @@ __all__ = [
     "CorruptLogError",
     "DeviceSpec",
     "DuplicateIdError",
+    "DuplicateLabelError",
     "ElementNotFoundError",
     "HistoryCompactedError",
     "InMemoryTransport",
+    "NameConflictError",
     "OntologyError",
     "PropertyValueError",
     "ProtocolError",
@@ -92,6 +97,7 @@ __all__ = [
     "WmError",
     "WmTransport",
     "ZenohTransport",
+    "display_name",
     "registration_ops",
     "unregistration_ops",
 ]

@@ -26,6 +26,7 @@ from task_agent import (
     parse_goal,
 )
 from tests.assets.planning import KittingScene, add_microwave, kitting_scene
+from wm_store import DuplicateLabelError
 
 
 @pytest.fixture(scope="module")
@@ -113,12 +114,12 @@ def test_error_columns(scene: KittingScene) -> None:
     assert info.value.column == len("contain(KitBox-1, Gear-1) and contain(KitBox-1, ") + 1
 
 
-def test_ambiguous_label() -> None:
+def test_a_label_names_one_element() -> None:
     scene = kitting_scene(1, 1)
-    add_microwave(scene, station=0, content="cold gear")
-    add_microwave(scene, station=1, content="hot gear")
-    with pytest.raises(GoalParseError, match="the label 'oven' is ambiguous: Microwave-1, Mic"):
-        parse_goal("heating(oven)", scene.view)
+    oven, _ = add_microwave(scene, station=0, content="cold gear")
+    with pytest.raises(DuplicateLabelError, match=rf"'oven'.*oven \({oven}\)"):
+        add_microwave(scene, station=1, content="hot gear")  # the store refuses a namesake
+    assert "heating" in str(parse_goal("heating(oven)", scene.view))
 
 
 def test_goal_structs_are_checked_and_labels_resolved(scene: KittingScene) -> None:
