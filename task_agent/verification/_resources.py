@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from skill_agent import WorldView
+from skill_agent.parameters import bindings
 from wm_store.scene import SceneState, id_sort_key
 
 from ..taskfile import CallSite, where
@@ -24,6 +25,8 @@ def call_locks(att: Attempt, view: WorldView, *, fixed: bool) -> set[str]:
     known = att.values if fixed and att.values is not None else att.given
     for spec in att.desc.parameters:
         value = known.get(spec.name)
+        if value is None and spec.kind == "hardware":  # the device the agent binds, if any
+            value = bindings(att.desc).get(spec.name)
         if spec.kind != "hardware" or (value is None and (spec.optional or not fixed)):
             continue
         if value is None:

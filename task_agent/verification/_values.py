@@ -74,7 +74,8 @@ def _element(spec: ParamSpec, element_id: str, view: WorldView, agent: AgentInfo
         )
     if spec.partial is not None and element_id not in matching(view, spec):
         return f": {element_id} does not match ({describe_query(spec.partial)})"
-    if spec.kind == "hardware" and agent.robot and element_id not in agent.hardware:
+    bound = element_id == spec.default  # the device the agent's configuration binds
+    if spec.kind == "hardware" and agent.robot and not bound and element_id not in agent.hardware:
         mine = [d for d in agent.hardware if is_of(view, d, spec.type)]
         return (
             f": {element_id} is not a device of agent {agent.name}; its {spec.type} "
