@@ -54,7 +54,7 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.scene._names import NameGuard, check_explicit_form
+from wm_store.scene._names import NameGuard, check_explicit_form, display_name
 from wm_store.scene._resolution import merge_observation, resolve_observations
 from wm_store.scene._state import SceneState, Undo
 
@@ -132,10 +132,13 @@ class _Txn:
             raise ElementNotFoundError(f"no element {ref_or_id!r}")
         return element
 
+    def _named(self, element_id: str) -> str:
+        return display_name(self.state.get(element_id), element_id)
+
     def _check_rev(self, element: Element, expect_rev: int | None) -> None:
         if expect_rev is not None and element.rev != expect_rev:
             raise ConflictError(
-                f"{element.id} is at rev {element.rev}, not the expected {expect_rev}; "
+                f"{display_name(element)} is at rev {element.rev}, not the expected {expect_rev}; "
                 "re-read it and retry"
             )
 
@@ -280,15 +283,16 @@ class _Txn:
         current = self.state.parent(rel.object)
         if current is not None:
             raise TreeShapeError(
-                f"{rel.object} already has the spatial parent {current.subject} "
-                f"({current.predicate}); unset that relation first to move it"
+                f"{self._named(rel.object)} already has the spatial parent "
+                f"{self._named(current.subject)} ({current.predicate}); unset that relation "
+                "first to move it"
             )
         walk: str | None = rel.subject
         while walk is not None:
             if walk == rel.object:
                 raise TreeShapeError(
                     f"{rel.predicate}({rel.subject}, {rel.object}) would make a cycle: "
-                    f"{rel.object} is an ancestor of {rel.subject}"
+                    f"{self._named(rel.object)} is an ancestor of {self._named(rel.subject)}"
                 )
             parent = self.state.parent(walk)
             walk = parent.subject if parent is not None else None
