@@ -302,7 +302,7 @@ async def test_status_runs_and_subscriptions(make_agent: AgentFactory, probe: Pr
         n = len(recorder.events)
         await core.wait((await core.start(StartRun(skill="noop"))).run_id)
         assert len(recorder.events) == n
-        assert started.inferred["gripper"].startswith(str(started.params["gripper"]))
+        assert f"({started.params['gripper']}): " in started.inferred["gripper"]  # label (id)
 
 
 async def test_event_loop_never_blocks(

@@ -149,8 +149,8 @@ async def test_a_bound_parameter_gets_the_configured_device(wm: WmClient) -> Non
     )
     assert asked.values["sensor"] == s["Camera-1"]
     assert asked.inferred["sensor"] == (
-        f"{s['Camera-1']}: this agent's 'sensor' device, bound by its configuration "
-        f"({s['r1-camera']} was asked for)"
+        "Camera-1: this agent's 'sensor' device, bound by its configuration "
+        f"(r1-camera ({s['r1-camera']}) was asked for)"
     )
     unbound = specify(Locate.description, {**given, "sensor": s["r1-camera"]}, wm, robot=robot)
     assert unbound.values["sensor"] == s["r1-camera"], "without a binding the request wins"
@@ -177,7 +177,9 @@ async def test_optional_hardware_takes_the_agents_one_device(wm: WmClient) -> No
     bound = {"sensor": s["Camera-1"], "platform": s["Worktop-1"]}
     spec = specify(Locate.description, given, wm, hardware=bound, robot=robot)
     assert spec.values["platform"] == s["Worktop-1"]
-    assert spec.inferred["platform"] == f"{s['Worktop-1']}: this agent's 'platform' device"
+    assert (
+        spec.inferred["platform"] == f"Worktop-1 ({s['Worktop-1']}): this agent's 'platform' device"
+    )
     # the agent's one device of the class, offered but not bound to the name
     offered = {"sensor": s["Camera-1"], "extra": s["Worktop-1"]}
     spec = specify(Locate.description, given, wm, hardware=offered, robot=robot)
