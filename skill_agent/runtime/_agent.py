@@ -55,7 +55,7 @@ from skill_agent.runtime._event_log import EventLog
 from skill_agent.runtime._locks import ResourceLocks
 from skill_agent.runtime._run import Run
 from skill_agent.runtime._simulated import SimulatedOutcomes
-from wm_store import WmClient
+from wm_store import WmClient, display_name
 from wm_store.protocol import Value
 
 __all__ = ["AgentCore", "SkillEntry"]
@@ -143,7 +143,9 @@ class AgentCore:
             on_write=self._written,
             run_child=self._run_child,
         )
-        self.locks = ResourceLocks()
+        self.locks = ResourceLocks(
+            name=lambda device: display_name(wm.find_element(device), device)
+        )
 
     # ------------------------------------------------------------------ hosting
 

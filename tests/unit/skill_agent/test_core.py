@@ -59,7 +59,9 @@ async def test_start_refusals_are_precise_and_nothing_moves(
         holder = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
         with pytest.raises(ResourceBusyError) as busy:
             await core.start(StartRun(skill="slow", params={"gripper": kitting["left"]}))
-        assert f"device {kitting['left']} is busy: run {holder.run_id} holds it" in str(busy.value)
+        assert f"device r1-left ({kitting['left']}) is busy: run {holder.run_id} holds it" in str(
+            busy.value
+        )
         await kitting.move(kitting["gear2"], kitting["right"])  # the right gripper is full
         with pytest.raises(PreconditionError, match=f"{kitting['right']} contains") as pre:
             await core.start(
