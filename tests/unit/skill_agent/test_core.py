@@ -174,7 +174,10 @@ async def test_queued_runs_wait_in_fifo_order_never_interleaved(
         assert end <= begin  # one after the other, in the order they were queued
     assert all(result_of(recorder, r).success for r in order)
     pending = [e for e in recorder.of(queued[0].run_id) if isinstance(e, Progress)][:2]
-    assert [p.message for p in pending] == [f"queued for devices: {left}", "devices acquired"]
+    assert [p.message for p in pending] == [
+        f"queued for devices: r1-left ({left})",
+        "devices acquired",
+    ]
 
 
 async def test_queued_run_checks_preconditions_when_its_turn_comes(
