@@ -130,8 +130,13 @@ class GoalChecker:
                 f"the label {ref!r} is ambiguous: {', '.join(found[:8])}; write an id instead",
                 column=column,
             )
-        if self._all is None:
-            elements = self.view.resolve_element(Query())
+        if self._all is None:  # element names, not skills' (a goal never names a skill)
+            onto = self.ontology
+            elements = [
+                e
+                for e in self.view.resolve_element(Query())
+                if not ("Skill" in onto.classes and onto.is_a(e.type, "Skill"))
+            ]
             self._all = [e.id for e in elements] + [e.label for e in elements if e.label]
         raise GoalParseError(
             f"unknown element {ref!r} (neither an id nor a label in the world model)"

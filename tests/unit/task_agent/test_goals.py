@@ -27,6 +27,8 @@ from task_agent import (
 )
 from tests.assets.planning import KittingScene, add_microwave, kitting_scene
 from wm_store import DuplicateLabelError
+from wm_store.protocol import AddElement
+from wm_store.scene import apply_transaction
 
 
 @pytest.fixture(scope="module")
@@ -120,6 +122,20 @@ def test_a_label_names_one_element() -> None:
     with pytest.raises(DuplicateLabelError, match=rf"'oven'.*oven \({oven}\)"):
         add_microwave(scene, station=1, content="hot gear")  # the store refuses a namesake
     assert "heating" in str(parse_goal("heating(oven)", scene.view))
+
+
+def test_suggestions_for_an_element_are_element_names_once() -> None:
+    scene = kitting_scene(1, 1)  # r1 registers its skills: elements labelled pick, place, ...
+    with pytest.raises(GoalParseError) as info:
+        parse_goal("contain(KitBox-1, placee)", scene.view)
+    assert "'place'" not in str(info.value), "a skill is no element of a goal"
+    state = scene.view.state
+    apply_transaction(
+        state, scene.view.ontology, [AddElement(type="Bolt", label="Bolt-1")], revision=99
+    )
+    with pytest.raises(GoalParseError) as info:
+        parse_goal("contain(KitBox-1, Bolt-11)", scene.view)
+    assert str(info.value).count("'Bolt-1'") == 1, "an id that is also its label, named once"
 
 
 def test_goal_structs_are_checked_and_labels_resolved(scene: KittingScene) -> None:
