@@ -122,7 +122,10 @@ class GoalChecker:
     def element(self, ref: str, column: int = 0) -> str:
         if self.view.find_element(ref) is not None:
             return ref
-        found = sorted(e.id for e in self.view.resolve_element(Query(label=ref)))
+        labelled = self.view.resolve_element(Query(label=ref))
+        found = sorted(e.id for e in labelled)
+        if len(found) > 1:  # an agent shares its robot's label: the goal means the robot
+            found = sorted(e.id for e in labelled if not self._agent_or_skill(e.type)) or found
         if len(found) == 1:
             return found[0]
         if found:
@@ -143,6 +146,10 @@ class GoalChecker:
             f"{did_you_mean(ref, self._all)}",
             column=column,
         )
+
+    def _agent_or_skill(self, cls: str) -> bool:
+        onto = self.ontology
+        return any(c in onto.classes and onto.is_a(cls, c) for c in ("Agent", "Skill"))
 
     def kind(self, name: str, column: int = 0) -> str:
         """``relation`` or ``property``."""

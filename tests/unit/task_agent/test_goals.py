@@ -27,7 +27,7 @@ from task_agent import (
 )
 from tests.assets.planning import KittingScene, add_microwave, kitting_scene
 from wm_store import DuplicateLabelError
-from wm_store.protocol import AddElement
+from wm_store.protocol import AddElement, UpdateElement
 from wm_store.scene import apply_transaction
 
 
@@ -136,6 +136,16 @@ def test_suggestions_for_an_element_are_element_names_once() -> None:
     with pytest.raises(GoalParseError) as info:
         parse_goal("contain(KitBox-1, Bolt-11)", scene.view)
     assert str(info.value).count("'Bolt-1'") == 1, "an id that is also its label, named once"
+
+
+def test_a_label_an_agent_shares_with_its_robot_means_the_robot() -> None:
+    scene = kitting_scene(1, 1)
+    state, onto = scene.view.state, scene.view.ontology
+    (agent,) = state.ids_with_label("r1")
+    robot = next(iter(state.subjects(agent, "controls") | state.objects(agent, "controls")))
+    apply_transaction(state, onto, [UpdateElement(id=robot, label="r1")], revision=99)
+    goal = parse_goal("at(r1, depot)", scene.view)
+    assert goal.literals[0].subject == robot  # type: ignore[union-attr]
 
 
 def test_goal_structs_are_checked_and_labels_resolved(scene: KittingScene) -> None:
