@@ -38,7 +38,10 @@ def check_literal(
     element_id = raw
     if raw.startswith(LABEL_PREFIX):
         label = raw[len(LABEL_PREFIX) :]
-        found = [e.id for e in view.resolve_element(Query(label=label))]
+        labelled = view.resolve_element(Query(label=label))
+        found = [e.id for e in labelled]
+        if len(found) > 1:  # an agent shares its robot's label: the label means the robot
+            found = [e.id for e in labelled if not _agent_or_skill(view, e.type)] or found
         if len(found) != 1:
             labels = {e.label for e in view.resolve_element(type=spec.type) if e.label}
             why = (
@@ -54,6 +57,11 @@ def check_literal(
         att.fail("type", f"{head}{problem}")
         return None
     return element_id
+
+
+def _agent_or_skill(view: WorldView, cls: str) -> bool:
+    onto = view.ontology
+    return any(c in onto.classes and onto.is_a(cls, c) for c in ("Agent", "Skill"))
 
 
 def _element(spec: ParamSpec, element_id: str, view: WorldView, agent: AgentInfo) -> str:

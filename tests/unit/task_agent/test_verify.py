@@ -621,3 +621,9 @@ def test_any_world_view_works_and_empty_tasks_are_structure_problems(kitting: Wo
         "structure",
         "a call needs a 'skill'",
     )
+
+
+def test_a_label_an_agent_shares_with_its_robot_means_the_robot(kitting: World) -> None:
+    w = with_ops(kitting, [AddElement(type="RobotAgent", label="r1")])  # as registration does
+    task = seq(call("r1", "navigate", goal="label:Station-1", robot="label:r1"))
+    assert problems(w, task) == []
