@@ -9,7 +9,9 @@ This face is the client's API and the package's errors::
 - :class:`WmClient` (local reads from its :class:`Replica`, writes to the store), the
   transports :class:`WmTransport`, :class:`InMemoryTransport` and :class:`ZenohTransport`,
   and robot registration (:class:`RobotRegistration`, :class:`DeviceSpec`, :class:`SkillSpec`);
-- every exception: all derive from :class:`WmError`, each with a stable wire ``code``.
+- every exception: all derive from :class:`WmError`, each with a stable wire ``code``;
+- :func:`display_name`: how plans, progress, output and errors name an element (its label,
+  with its id where the two differ).
 
 The concepts, each a sub-package whose face is the public path of its names (pure core first,
 adapters last)::

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 
 from skill_agent import WorldView
 from skill_agent.parameters import bindings
+from wm_store import display_name
 from wm_store.scene import SceneState, id_sort_key
 
 from ..taskfile import CallSite, where
@@ -65,6 +66,4 @@ def resource_problems(
 def _device(lock: str, state: SceneState) -> str:
     if lock.startswith(_AGENT):
         return f"agent {lock[len(_AGENT) :]} (its devices for these calls are not known)"
-    element = state.get(lock)
-    label = element.label if element is not None else ""
-    return f"{lock} ({label})" if label and label != lock else lock
+    return display_name(state.get(lock), lock)

@@ -195,9 +195,9 @@ EXPECTED: dict[str, list[tuple[str, str]]] = {
         (
             "root.2.1 (drive)",
             "may run at the same time as root.2.0 (place) (both lock "
-            "MobileManipulator-1 (r1)): an agent runs one skill per device at a time",
+            "r1 (MobileManipulator-1)): an agent runs one skill per device at a time",
         ),
-        ("root.2.2 (look)", "as root.2.0 (place) (both lock Camera-2 (r1-camera))"),
+        ("root.2.2 (look)", "as root.2.0 (place) (both lock r1-camera (Camera-2))"),
     ],
     "preconditions": [
         (
@@ -296,7 +296,7 @@ def test_an_agent_less_call_must_work_on_every_agent_it_may_get(kitting: World) 
         "no agent named, so the task agent takes the first idle one offering locate (r1, r2); "
         "on r2: parameter 'sensor': Camera-2 is not a device of agent r2"
     )
-    assert "(both lock Camera-2 (r1-camera))" in found[1][2]
+    assert "(both lock r1-camera (Camera-2))" in found[1][2]
 
 
 # --------------------------------------------------------------------------- dataflow
@@ -456,7 +456,7 @@ def test_devices_are_predicted_even_when_the_call_cannot_be_specified(kitting: W
         ("root.1", "resource"),
         ("root.1", "precondition"),
     ]
-    assert "as root.0 (both lock MobileManipulator-1 (r1))" in found[1][2]
+    assert "as root.0 (both lock r1 (MobileManipulator-1))" in found[1][2]
 
 
 def test_an_agent_whose_devices_cannot_be_known_is_locked_whole(kitting: World) -> None:
