@@ -188,7 +188,11 @@ EXPECTED: dict[str, list[tuple[str, str]]] = {
         ("root.2", "parameter 'goal' takes a Location; Gear-1 is a Gear (Gear < Part <"),
         ("root.3", "parameter 'speed' takes a float value, got string 'fast'"),
         ("root.4", "parameter 'object' takes an element id or 'label:<label>' (a PhysicalObject)"),
-        ("root.5", "Camera-3 is not a device of agent r1; its Sensor devices: Camera-2"),
+        (
+            "root.5",
+            "r2-camera (Camera-3) is not a device of agent r1; its Sensor devices: "
+            "r1-camera (Camera-2)",
+        ),
         ("root.6", "'container' = '@go.goal': the source is a Location, 'container' takes a"),
     ],
     "resources": [
@@ -272,7 +276,9 @@ def test_an_agent_less_call_must_work_on_every_agent_it_may_get(kitting: World) 
     alone = seq(call("", "pick", object="Bolt-2", gripper="Gripper-2"))
     ((path, kind, message),) = problems(kitting, alone)
     assert (path, kind) == ("root.0", "type")
-    assert message.startswith("pick on r1: parameter 'gripper': Gripper-2 is not a device of")
+    assert message.startswith(
+        "pick on r1: parameter 'gripper': r2-gripper (Gripper-2) is not a device of"
+    )
     # r1 may be busy with the navigation: the locate may get r1 or r2; both can run it
     report = check(
         TaskFile(
@@ -294,7 +300,7 @@ def test_an_agent_less_call_must_work_on_every_agent_it_may_get(kitting: World) 
     assert [p[:2] for p in found] == [("root.1", "type"), ("root.1", "resource")]
     assert found[0][2].startswith(
         "no agent named, so the task agent takes the first idle one offering locate (r1, r2); "
-        "on r2: parameter 'sensor': Camera-2 is not a device of agent r2"
+        "on r2: parameter 'sensor': r1-camera (Camera-2) is not a device of agent r2"
     )
     assert "(both lock r1-camera (Camera-2))" in found[1][2]
 
