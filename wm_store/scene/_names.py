@@ -28,7 +28,7 @@ from wm_store.ontology import Ontology
 from wm_store.protocol import Element
 from wm_store.scene._state import SceneState, parse_id
 
-__all__ = ["NameGuard", "display_name", "label_namespace"]
+__all__ = ["NameGuard", "check_explicit_form", "display_name", "label_namespace"]
 
 _AGENT, _SKILL = "Agent", "Skill"
 
@@ -59,15 +59,8 @@ def label_namespace(ontology: Ontology, cls: str) -> str:
 class NameGuard:
     """The naming rules over one transaction (see the module doc)."""
 
-    def __init__(
-        self,
-        state: SceneState,
-        ontology: Ontology,
-        counters: dict[str, int],
-        labels: Iterable[str],
-    ) -> None:
+    def __init__(self, state: SceneState, counters: dict[str, int], labels: Iterable[str]) -> None:
         self.state = state
-        self.ontology = ontology
         self.start = counters
         """The counters before the transaction: ids at or under them may have been used."""
         self.pending = {label for label in labels if label}
@@ -114,8 +107,11 @@ class NameGuard:
         self.assigned.add(element_id)
         return element_id
 
-    def check_label(self, element_id: str, element_type: str, label: str) -> None:
-        """Refuse ``label`` for the element ``element_id`` if another element is named so."""
+    def check_label(
+        self, ontology: Ontology, element_id: str, element_type: str, label: str
+    ) -> None:
+        """Refuse ``label`` for the element ``element_id`` if another element is named so
+        (``ontology``: the transaction's, which tells agents and skills)."""
         if not label:
             return
         what = f"{element_type} {element_id}"
@@ -125,14 +121,14 @@ class NameGuard:
                 "names one element; choose another label (one not of the form <Type>-<n>, "
                 f"or {element_id!r} itself)"
             )
-        space = label_namespace(self.ontology, element_type)
+        space = label_namespace(ontology, element_type)
         if not space:
             return
         for other in sorted(self.state.ids_with_label(label)):
             if other == element_id:
                 continue
             element = self.state.elements[other]
-            if label_namespace(self.ontology, element.type) == space:
+            if label_namespace(ontology, element.type) == space:
                 raise DuplicateLabelError(
                     f"label {label!r} of the {what} is already the label of "
                     f"{display_name(element)}: labels are unique (an agent's among agents, "

@@ -86,7 +86,7 @@ def apply_transaction(
     """
     txn = _Txn(state, ontology, revision, time.time() if now is None else now)
     counters = dict(state.counters)
-    txn.names = NameGuard(state, ontology, counters, _labels_written(ops))
+    txn.names = NameGuard(state, counters, _labels_written(ops))
     try:
         for index, op in enumerate(ops):
             try:
@@ -115,7 +115,7 @@ class _Txn:
         self.deltas: list[Delta] = []
         self.undo: list[Undo] = []
         self.ids: dict[str, str] = {}
-        self.names = NameGuard(state, ontology, dict(state.counters), ())
+        self.names = NameGuard(state, dict(state.counters), ())
 
     # ------------------------------------------------------------------ plumbing
 
@@ -182,7 +182,7 @@ class _Txn:
         for name, value in op.properties.items():
             self._check_property(element_type, name, value)
         element_id = self._new_id(element_type, op.id, op.label)
-        self.names.check_label(element_id, element_type, op.label)
+        self.names.check_label(self.ontology, element_id, element_type, op.label)
         ref = op.ref or f"#{index}"
         if ref in self.ids:
             raise ValidationError(f"ref {ref!r} is used twice in this transaction")
@@ -226,7 +226,7 @@ class _Txn:
         observations = {k: v for k, v in element.observations.items() if k in props}
         label = element.label if op.label is None else op.label
         if label != element.label:
-            self.names.check_label(element.id, element.type, label)
+            self.names.check_label(self.ontology, element.id, element.type, label)
         self._emit(
             ElementPut(
                 self._stamp(element, properties=props, observations=observations, label=label)
