@@ -23,6 +23,7 @@ from task_agent import parse_goal
 from task_agent.discovery import agents_from_view
 from task_agent.domain import build_task
 from task_agent.protocol import Call, TaskFile
+from task_agent.protocol import Parallel as Par
 from task_agent.protocol import Sequence as Seq
 from task_agent.verification import check
 from wm_store import InMemoryTransport, WmClient
@@ -75,3 +76,30 @@ async def test_the_planned_sensor_is_the_locked_sensor(wm: WmClient) -> None:
         specified = core._specify(locate, given)
         assert specified.values["sensor"] == overhead
         assert overhead in core._resources(locate, specified.values)
+
+
+async def test_a_device_two_agents_share_is_no_conflict_between_them(wm: WmClient) -> None:
+    scenario = load_scenario(ROOT / "configs/scenarios/kitting/scenario.toml")
+    ids = {k[1:]: v for k, v in (await wm.transact(scenario_ops(scenario))).ids.items()}
+    for name in ("r1", "r2"):
+        config = load_config(ROOT / f"configs/agents/kitting/{name}.toml")
+        registry = SkillRegistry.from_config(config, wm.ontology)
+        core = AgentCore(name=name, wm=wm, skills=registry.load(), registry=registry.conditions)
+        await _register(wm, core, config, f"skimesh/test/{name}", None)
+    agents = [a for a in agents_from_view(wm) if a.name in ("r1", "r2")]
+
+    def locate(agent: str, part: str) -> Call:
+        return Call(agent=agent, skill="locate", params={"object": ids[part]})
+
+    # agents lock devices for their own runs: r1 and r2 may both use the overhead camera
+    apart = check(
+        TaskFile(root=Par(children=[locate("r1", "Gear-1"), locate("r2", "Bolt-1")])), wm, agents
+    )
+    assert apart.problems == []
+    assert all(ids["Camera-1"] in step.locks for step in apart.steps)
+    # one agent: one run per device at a time
+    one = check(
+        TaskFile(root=Par(children=[locate("r1", "Gear-1"), locate("r1", "Gear-2")])), wm, agents
+    )
+    assert [p.kind for p in one.problems] == ["resource"]
+    assert "Camera-1" in one.problems[0].message
