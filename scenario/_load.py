@@ -2,6 +2,7 @@
 
 :func:`load_scenario` parses TOML into a :class:`~scenario.Scenario` (field
 types and ranges, unknown keys refused) and then checks what types cannot: labels unique,
+labels of the form of an id only on elements of that class (:func:`_id_shaped_label_problems`),
 parents and mounts that exist and may hold the child, no container cycles, sensors complete,
 a fixed robot neither a MobileManipulator nor carrying anything, goals well formed and naming
 known labels. Agent config paths become absolute.
@@ -143,6 +144,8 @@ def check_scenario(s: Scenario) -> None:
         if label in seen:
             fail(f"{where}: label {label!r} is already used by {seen[label]}")
         seen[label] = where
+    for problem in _id_shaped_label_problems(s):
+        fail(problem)
     robots = {r.name for r in s.robots}
     furniture = {f.label: f for f in s.furniture}
     containers = {c.label: c for c in s.containers}
@@ -231,6 +234,53 @@ def _check_fixed_robots(s: Scenario, fail: Callable[[str], None]) -> None:
     for i, sensor in enumerate(s.sensors):
         if sensor.kind == "camera" and sensor.mount in fixed and sensor.site == "front_camera":
             fail(f'$.sensors[{i}].site: fixed robot {sensor.mount!r} has only "wrist_camera"')
+
+
+_SCENE_CLASSES = ("Location", "Arm", "Gripper", "MobileBase")
+"""Classes of the elements the scene adds beside the scenario's own: robots' homes, devices."""
+
+
+def _id_shaped_label_problems(s: Scenario) -> list[str]:
+    """Labels of the form of an element id, ``<Class>-<n>`` with ``Class`` a class of the
+    scene's elements, on an element of another class (a Gear labelled ``Shaft-2`` in a scene
+    with shafts): each the message of a refusal, with its field path.
+
+    The rule: a label shaped like an id is the id of its own element (the store gives a
+    ``Gear`` labelled ``Gear-3`` the id ``Gear-3``) and never another element's; other labels
+    (``Pulley-4`` where there is no Pulley, ``r1-home``) are names, never taken for ids."""
+    typed = _typed_labels(s)
+    classes = {cls for _, _, cls in typed} | set(_SCENE_CLASSES)
+    problems = []
+    for where, label, cls in typed:
+        head, sep, tail = label.rpartition("-")
+        if sep and tail.isdigit() and head in classes and head != cls:
+            problems.append(
+                f"{where}: label {label!r} has the form of an id of a {head}, but it labels a "
+                f"{cls}; a label <Class>-<n> must be of the element's own class (it becomes "
+                f"its id, and names no other element): call it {cls}-<n>, or a name that is "
+                "not of that form"
+            )
+    return problems
+
+
+def _typed_labels(s: Scenario) -> list[tuple[str, str, str]]:
+    """(field path, label, class) of the scenario's elements (robots' devices aside)."""
+    found = [(f"$.robots[{i}].name", r.name, r.type) for i, r in enumerate(s.robots)]
+    found += [(f"$.furniture[{i}].label", f.label, f.type) for i, f in enumerate(s.furniture)]
+    found += [
+        (f"$.furniture[{i}].drawer.label", f.drawer.label, f.drawer.type)
+        for i, f in enumerate(s.furniture)
+        if f.drawer is not None
+    ]
+    found += [(f"$.containers[{i}].label", c.label, c.type) for i, c in enumerate(s.containers)]
+    found += [(f"$.parts[{i}].label", p.label, p.type) for i, p in enumerate(s.parts)]
+    found += [(f"$.appliances[{i}].label", a.label, a.type) for i, a in enumerate(s.appliances)]
+    found += [
+        (f"$.sensors[{i}].label", x.label, x.ontology_type)
+        for i, x in enumerate(s.sensors)
+        if not (x.kind == "platform" and x.label == x.surface)
+    ]
+    return found
 
 
 def _all_labels(s: Scenario) -> list[tuple[str, str]]:

@@ -122,7 +122,10 @@ class GoalChecker:
     def element(self, ref: str, column: int = 0) -> str:
         if self.view.find_element(ref) is not None:
             return ref
-        found = sorted(e.id for e in self.view.resolve_element(Query(label=ref)))
+        labelled = self.view.resolve_element(Query(label=ref))
+        found = sorted(e.id for e in labelled)
+        if len(found) > 1:  # an agent shares its robot's label: the goal means the robot
+            found = sorted(e.id for e in labelled if not self._agent_or_skill(e.type)) or found
         if len(found) == 1:
             return found[0]
         if found:
@@ -130,14 +133,23 @@ class GoalChecker:
                 f"the label {ref!r} is ambiguous: {', '.join(found[:8])}; write an id instead",
                 column=column,
             )
-        if self._all is None:
-            elements = self.view.resolve_element(Query())
+        if self._all is None:  # element names, not skills' (a goal never names a skill)
+            onto = self.ontology
+            elements = [
+                e
+                for e in self.view.resolve_element(Query())
+                if not ("Skill" in onto.classes and onto.is_a(e.type, "Skill"))
+            ]
             self._all = [e.id for e in elements] + [e.label for e in elements if e.label]
         raise GoalParseError(
             f"unknown element {ref!r} (neither an id nor a label in the world model)"
             f"{did_you_mean(ref, self._all)}",
             column=column,
         )
+
+    def _agent_or_skill(self, cls: str) -> bool:
+        onto = self.ontology
+        return any(c in onto.classes and onto.is_a(cls, c) for c in ("Agent", "Skill"))
 
     def kind(self, name: str, column: int = 0) -> str:
         """``relation`` or ``property``."""

@@ -9,7 +9,9 @@ This face is the client's API and the package's errors::
 - :class:`WmClient` (local reads from its :class:`Replica`, writes to the store), the
   transports :class:`WmTransport`, :class:`InMemoryTransport` and :class:`ZenohTransport`,
   and robot registration (:class:`RobotRegistration`, :class:`DeviceSpec`, :class:`SkillSpec`);
-- every exception: all derive from :class:`WmError`, each with a stable wire ``code``.
+- every exception: all derive from :class:`WmError`, each with a stable wire ``code``;
+- :func:`display_name`: how plans, progress, output and errors name an element (its label,
+  with its id where the two differ).
 
 The concepts, each a sub-package whose face is the public path of its names (pure core first,
 adapters last)::
@@ -33,8 +35,10 @@ from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
 from ._errors import CorruptLogError as CorruptLogError
 from ._errors import DuplicateIdError as DuplicateIdError
+from ._errors import DuplicateLabelError as DuplicateLabelError
 from ._errors import ElementNotFoundError as ElementNotFoundError
 from ._errors import HistoryCompactedError as HistoryCompactedError
+from ._errors import NameConflictError as NameConflictError
 from ._errors import OntologyError as OntologyError
 from ._errors import PropertyValueError as PropertyValueError
 from ._errors import ProtocolError as ProtocolError
@@ -61,6 +65,7 @@ from ._replica import ReplicaStats as ReplicaStats
 from ._transport import InMemoryTransport as InMemoryTransport
 from ._transport import WmTransport as WmTransport
 from ._zenoh_transport import ZenohTransport as ZenohTransport
+from .scene._names import display_name as display_name
 
 __all__ = [
     "CardinalityError",
@@ -68,9 +73,11 @@ __all__ = [
     "CorruptLogError",
     "DeviceSpec",
     "DuplicateIdError",
+    "DuplicateLabelError",
     "ElementNotFoundError",
     "HistoryCompactedError",
     "InMemoryTransport",
+    "NameConflictError",
     "OntologyError",
     "PropertyValueError",
     "ProtocolError",
@@ -94,6 +101,7 @@ __all__ = [
     "WmError",
     "WmTransport",
     "ZenohTransport",
+    "display_name",
     "registration_ops",
     "unregistration_ops",
 ]

@@ -16,6 +16,8 @@ Hierarchy::
     │   ├── CardinalityError           more (or fewer) relations than the ontology allows
     │   ├── ElementNotFoundError       no element with that id
     │   ├── DuplicateIdError           an explicit id that is taken or was used before
+    │   ├── NameConflictError          a name that would be one element's id and another's label
+    │   ├── DuplicateLabelError        a label another element of its kind has already
     │   ├── ConflictError              compare-and-set failed: the element or store moved on
     │   └── QueryLimitError            a SPARQL query over a limit: text size, time, rows, queue
     ├── ProtocolError                  bytes that do not decode to a request/reply of this schema,
@@ -53,8 +55,10 @@ __all__ = [
     "ConflictError",
     "CorruptLogError",
     "DuplicateIdError",
+    "DuplicateLabelError",
     "ElementNotFoundError",
     "HistoryCompactedError",
+    "NameConflictError",
     "OntologyError",
     "PropertyValueError",
     "ProtocolError",
@@ -129,6 +133,20 @@ class DuplicateIdError(ValidationError):
     code = "duplicate_id"
 
 
+class NameConflictError(ValidationError):
+    """A name would be the id of one element and the label of another (the message names
+    both): a label equal to another element's id, or an explicit id equal to another's label."""
+
+    code = "name_conflict"
+
+
+class DuplicateLabelError(ValidationError):
+    """A label that another element of the same kind has already (scene elements among
+    themselves, agents among themselves; the message names that element)."""
+
+    code = "duplicate_label"
+
+
 class ConflictError(ValidationError):
     code = "conflict"
 
@@ -190,6 +208,8 @@ _BY_CODE = errors_by_code(
     CardinalityError,
     ElementNotFoundError,
     DuplicateIdError,
+    NameConflictError,
+    DuplicateLabelError,
     ConflictError,
     QueryLimitError,
     ProtocolError,

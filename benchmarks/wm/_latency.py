@@ -77,7 +77,7 @@ async def propagation(
     """Sequential single-op commits by this process; the store stamps each change as it
     publishes it, the replica process as its ``on_change`` runs. Returns (publish -> apply,
     commit call -> remote apply, payload bytes of one change)."""
-    target = await wm.add_element("Gear", label="propagation")
+    target = await wm.add_element("Gear", label=f"propagation@{wm.revision}")  # labels unique
     first = wm.revision
     started: dict[int, int] = {}
     for i in range(bench.plan.changes):

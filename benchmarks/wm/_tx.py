@@ -150,8 +150,9 @@ async def zenoh_tps(
     """WmClient.update_element: request -> router -> store (fsync, group) -> reply, then (the
     client's default) wait until the change is back in the writer's own replica."""
     ids = []
+    run = wm.revision  # labels are unique: each run's writers are labelled apart
     for w in range(writers):
-        ids.append(await wm.add_element("Gear", label=f"z{writers}-{w}"))
+        ids.append(await wm.add_element("Gear", label=f"z{writers}-{w}@{run}"))
 
     async def commit(w: int, i: int) -> object:
         return await wm.update_element(ids[w], {"mass": mass_at(w, i)})

@@ -9,7 +9,9 @@ scenario's own ontology terms (:func:`scenario_terms`, its ``ontology`` files), 
   scene (a durable store restarted with ``--scenario``, an import repeated): nothing to write.
 - **Robots registered first are reused**: an agent started before the scene registers its
   robot and devices, then fails to wire a fixed camera; those elements are reused by label
-  (updated, not added twice), so the agents wire cleanly once the scene is there.
+  (updated, not added twice), so the agents wire cleanly once the scene is there. A scenario
+  label that is already the id of such an element is a :class:`~scenario.ScenarioError`
+  (:mod:`scenario.wm._names`).
 
 :func:`read_scenario` finds a scenario by name (``configs/scenarios/NAME/scenario.toml``) or
 file; an unknown name is a :class:`~device_drivers.ScenarioError` naming the known ones.
@@ -22,6 +24,7 @@ from pathlib import Path
 
 from scenario._errors import ScenarioError
 from scenario._schema import Scenario
+from scenario.wm._names import name_clashes
 from scenario.wm._ops import scenario_ops
 from wm_store import WmError
 from wm_store.ontology import Ontology
@@ -86,7 +89,11 @@ def _element_ops(scenario: Scenario, state: SceneState, ontology: Ontology) -> l
         ids = [i for i in state.ids_with_label(label) if not _registered(state, ontology, i)]
         if len(ids) == 1:
             existing[label] = ids[0]
-    return scenario_ops(scenario, existing, ontology=ontology)
+    ops = scenario_ops(scenario, existing, ontology=ontology)
+    clashes = name_clashes(ops, state)
+    if clashes:
+        raise ScenarioError("; ".join(clashes), source=scenario.source or scenario.name)
+    return ops
 
 
 def _registered(state: SceneState, ontology: Ontology, element: str) -> bool:

@@ -58,6 +58,7 @@ from skill_agent.protocol._skills import (
     ParamSpec,
     SkillDescription,
 )
+from wm_store import display_name
 from wm_store.ontology import TYPED_KINDS, did_you_mean, kind_of, with_article
 from wm_store.protocol import Value
 from wm_store.scene import id_sort_key
@@ -134,24 +135,30 @@ def _check_element(
             f"{', '.join(known[:10]) or 'none'}"
         )
     ontology = view.ontology
+    name = display_name(element)
     if not ontology.is_a(element.type, spec.type):
         chain = " < ".join(ontology.superclasses(element.type))
         raise ParameterTypeError(
-            f"{where} takes {with_article(spec.type)}; {value} is {with_article(element.type)} "
+            f"{where} takes {with_article(spec.type)}; {name} is {with_article(element.type)} "
             f"({chain})"
         )
     if spec.partial is not None and value not in matching(view, spec):
         raise ParameterTypeError(
-            f"{where}: {value} does not match its partial definition "
+            f"{where}: {name} does not match its partial definition "
             f"({describe_query(spec.partial)})"
         )
     if spec.kind == "hardware" and devices and value not in devices:  # devices: [] w/o robot
         mine = [d for d in devices if _is(view, d, spec.type)]
         raise ParameterError(
-            f"{where}: {value} is not a device of this agent; its {spec.type} devices: "
-            f"{', '.join(mine) or 'none'}"
+            f"{where}: {name} is not a device of this agent; its {spec.type} devices: "
+            f"{_names(view, mine) or 'none'}"
         )
     return value
+
+
+def _names(view: WorldView, element_ids: Iterable[str]) -> str:
+    """Elements as messages name them (:func:`wm_store.display_name`), comma-separated."""
+    return ", ".join(display_name(view.find_element(i), i) for i in element_ids)
 
 
 def _is(view: WorldView, element_id: str, cls: str) -> bool:
@@ -185,11 +192,12 @@ def _pick_device(
             f"skill '{desc.name}': this agent offers no such device (its devices: "
             f"{', '.join(devices) or 'none'}; robot: {robot or 'not given'})"
         )
+    first, second = _names(view, fitting[:1]), _names(view, fitting[1:2])
     if len(fitting) == 1:
-        return fitting[0], f"{fitting[0]}: this agent's only {spec.type}"
+        return fitting[0], f"{first}: this agent's only {spec.type}"
     return fitting[0], (
-        f"{fitting[0]}: first by id of this agent's {len(fitting)} {spec.type} devices "
-        f"({', '.join(fitting)}); runner-up {fitting[1]}; give '{spec.name}' to choose another"
+        f"{first}: first by id of this agent's {len(fitting)} {spec.type} devices "
+        f"({_names(view, fitting)}); runner-up {second}; give '{spec.name}' to choose another"
     )
 
 
@@ -217,12 +225,12 @@ def _hardware_value(
             return checked, ""
         device = _check_element(desc, spec, bound, view, [])
         return device, (
-            f"{device}: this agent's '{spec.name}' device, bound by its configuration "
-            f"({checked} was asked for)"
+            f"{_names(view, [device])}: this agent's '{spec.name}' device, bound by its "
+            f"configuration ({_names(view, [checked])} was asked for)"
         )
     if bound is not None:
         device = _check_element(desc, spec, bound, view, [])
-        return device, f"{device}: this agent's '{spec.name}' device"
+        return device, f"{_names(view, [device])}: this agent's '{spec.name}' device"
     if not spec.optional:
         return _pick_device(desc, spec, view, devices, robot)
     fitting = [d for d in devices if _is(view, d, spec.type)]
@@ -230,7 +238,7 @@ def _hardware_value(
         allowed = set(matching(view, spec))
         fitting = [d for d in fitting if d in allowed]
     if len(fitting) == 1:
-        return fitting[0], f"{fitting[0]}: this agent's only {spec.type} (optional)"
+        return fitting[0], f"{_names(view, fitting)}: this agent's only {spec.type} (optional)"
     return None, ""
 
 

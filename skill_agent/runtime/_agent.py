@@ -39,6 +39,7 @@ from skill_agent._errors import (
 )
 from skill_agent._skill import Skill
 from skill_agent.conditions._model import ConditionRegistry
+from skill_agent.parameters._bindings import with_bindings
 from skill_agent.parameters._specify import Specified, specify
 from skill_agent.protocol._log import (
     ProgressEntry,
@@ -54,7 +55,7 @@ from skill_agent.runtime._event_log import EventLog
 from skill_agent.runtime._locks import ResourceLocks
 from skill_agent.runtime._run import Run
 from skill_agent.runtime._simulated import SimulatedOutcomes
-from wm_store import WmClient
+from wm_store import WmClient, display_name
 from wm_store.protocol import Value
 
 __all__ = ["AgentCore", "SkillEntry"]
@@ -142,7 +143,9 @@ class AgentCore:
             on_write=self._written,
             run_child=self._run_child,
         )
-        self.locks = ResourceLocks()
+        self.locks = ResourceLocks(
+            name=lambda device: display_name(wm.find_element(device), device)
+        )
 
     # ------------------------------------------------------------------ hosting
 
@@ -236,8 +239,11 @@ class AgentCore:
         return await self._run(run_id).wait()
 
     def descriptions(self) -> list[SkillDescription]:
-        """The descriptions of the current catalog. Never blocks."""
-        return [entry.description for entry in self._skills.values()]
+        """The descriptions of the current catalog, each hardware parameter this agent binds
+        (``hardware[name]``) defaulting to its device (:func:`~skill_agent.parameters.
+        with_bindings`: what the agent registers, so plans bind the devices runs lock).
+        Never blocks."""
+        return [with_bindings(entry.description, self.hardware) for entry in self._skills.values()]
 
     def replace_skills(self, skills: Mapping[str, SkillEntry]) -> None:
         """Swap the skill catalog (reload): new runs use the new entries, running runs (and

@@ -19,6 +19,7 @@ import anyio.lowlevel
 from skill_agent._errors import ParameterError, ParameterTypeError, RunStateError
 from skill_agent.protocol._runs import RunResult
 from skill_agent.runtime._run_wm import RunWm
+from wm_store import display_name
 from wm_store.protocol import Element, Op, Value
 
 if TYPE_CHECKING:
@@ -67,11 +68,16 @@ class RunContext:
             )
         device_id = self.params.get(param)
         driver = self._run.env.devices.get(device_id) if isinstance(device_id, str) else None
+        name = (
+            display_name(self._run.env.wm.find_element(device_id), device_id)
+            if isinstance(device_id, str)
+            else repr(device_id)
+        )
         if driver is None:
-            raise ParameterError(f"agent {self.agent} has no driver for device {device_id!r}")
+            raise ParameterError(f"agent {self.agent} has no driver for device {name}")
         if not isinstance(driver, kind):
             raise ParameterTypeError(
-                f"device {device_id} is a {type(driver).__name__}, not a {kind.__name__}"
+                f"device {name} is a {type(driver).__name__}, not a {kind.__name__}"
             )
         return driver
 

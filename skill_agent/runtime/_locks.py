@@ -14,13 +14,16 @@ Sub-runs of a composite skill *borrow* devices from their ancestors: a device he
 ancestor is lent to the child and returns to the lender when the child releases it. Two
 children of one parent cannot borrow the same device at once.
 
+Locks are keyed by device element id; messages name a device by ``name`` (the agent gives
+:func:`wm_store.display_name`, so ``r1-camera (Camera-2)``), the id alone by default.
+
 Everything here is synchronous except :meth:`ResourceLocks.acquire`; no method blocks the loop.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Collection, Iterable
+from collections.abc import Callable, Collection, Iterable
 
 import anyio
 import msgspec
@@ -70,7 +73,9 @@ class LockRequest:
 class ResourceLocks:
     """Per-device locks held by runs (see the module docstring). One instance per agent."""
 
-    def __init__(self) -> None:
+    def __init__(self, name: Callable[[str], str] = str) -> None:
+        """``name``: device id -> how messages name it."""
+        self._name = name
         self._holders: dict[str, str] = {}
         self._lent: dict[str, dict[str, str]] = {}  # borrower run -> device -> lender run
         self._waiters: deque[_Waiter] = deque()
@@ -152,7 +157,7 @@ class ResourceLocks:
             holder = self._holders.get(device)
             if holder is not None and holder != run_id and holder not in borrow_from:
                 raise ResourceBusyError(
-                    f"device {device} is busy: run {holder} holds it"
+                    f"device {self._name(device)} is busy: run {holder} holds it"
                     " (stop that run, or start with queue=True to wait for it)"
                 )
         fresh = {d for d in wanted if d not in self._holders}  # borrowed ones skip the line
@@ -161,7 +166,7 @@ class ResourceLocks:
             if clash and waiter.run_id != run_id:
                 device = min(clash)
                 raise ResourceBusyError(
-                    f"device {device} is busy: run {waiter.run_id} is queued for it"
+                    f"device {self._name(device)} is busy: run {waiter.run_id} is queued for it"
                     " (start with queue=True to wait in line)"
                 )
 

@@ -55,6 +55,7 @@ from skill_agent.protocol._skills import SkillDescription
 from skill_agent.runtime._context import RunContext
 from skill_agent.runtime._control import RunControl, RunEnv
 from skill_agent.runtime._simulated import SimulatedOutcomes
+from wm_store import display_name
 from wm_store.protocol import Change, Op, Value
 
 __all__ = ["Run"]
@@ -103,7 +104,8 @@ class Run(RunControl):
         enclosing scope (the agent shutting down), re-raised after ``on_preempt`` and the
         result."""
         self._step = "start"
-        devices = ", ".join(self.resources) or "none"
+        wm = self.env.wm
+        devices = ", ".join(display_name(wm.find_element(d), d) for d in self.resources) or "none"
         queued = self._acquire is not None
         self._emit_progress("pending", f"{'queued for' if queued else 'holds'} devices: {devices}")
         try:

@@ -13,8 +13,11 @@ drivers and :func:`bind_hardware` turns the configuration's ``[hardware]`` bindi
     hardware = bind_hardware(wm, config.hardware, robot=core.robot)
 
 A label resolves to the one element with that label that is not an agent or a skill (an
-agent is often named like its robot), preferring the agent's robot and its ``hasA`` parts when
-several carry it. Pure: reads the world model's local replica, nothing blocks.
+agent is often named like its robot; the store keeps every other label unique, so there is at
+most one), preferring the agent's robot and its ``hasA`` parts should several carry it. The
+resolved ``[hardware]`` bindings are what the agent publishes with its skills
+(:func:`skill_agent.parameters.with_bindings`), so planners bind the same devices. Pure: reads
+the world model's local replica, nothing blocks.
 
 Errors: :class:`WiringError` (a :class:`~skill_agent.SkillLoadError`) when a label of
 the configuration names no element or several.

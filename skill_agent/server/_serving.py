@@ -20,7 +20,12 @@ from skill_agent.runtime._config import AgentConfig
 from skill_agent.runtime._event_log import EventLog
 from skill_agent.runtime._plugins import SkillRegistry
 from skill_agent.runtime._simulated import SimulatedOutcomes
-from skill_agent.runtime._wiring import bind_devices, bind_hardware
+from skill_agent.runtime._wiring import (
+    WiringError,
+    bind_devices,
+    bind_hardware,
+    element_for_label,
+)
 from skill_agent.server._publisher import RunEventPublisher
 from skill_agent.server._service import AgentService
 from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
@@ -60,6 +65,11 @@ async def _register(
     address: str,
     drivers: Mapping[str, object] | None,
 ) -> None:
+    # the bindings published with the skills (their hardware defaults) are the ones runs use:
+    # those whose devices are there already go with the first registration, the rest (the
+    # robot's own devices, just registered) with a second one
+    published = _bound_already(wm, config.hardware)
+    core.hardware.update(published)
     await wm.register_robot(agent_registration(config, core.descriptions(), address=address))
     agents = wm.resolve_element(type="Agent", label=config.name)
     controlled = [r.object for a in agents for r in wm.query_relation(a.id, "controls")]
@@ -67,7 +77,21 @@ async def _register(
     if drivers is not None:  # in place: the runs' environment holds this very dict
         core.devices.clear()
         core.devices.update(bind_devices(wm, config.device_labels, drivers, robot=core.robot))
-    core.hardware.update(bind_hardware(wm, config.hardware, robot=core.robot))
+    bound = bind_hardware(wm, config.hardware, robot=core.robot)
+    core.hardware.update(bound)
+    if bound != published:
+        await wm.register_robot(agent_registration(config, core.descriptions(), address=address))
+
+
+def _bound_already(wm: WmClient, hardware: Mapping[str, str]) -> dict[str, str]:
+    """Parameter -> device id of the configured bindings whose device is an element now."""
+    found = {}
+    for param, label in hardware.items():
+        try:
+            found[param] = element_for_label(wm, label)
+        except WiringError:
+            continue
+    return found
 
 
 async def serve_agent(

@@ -103,7 +103,7 @@ class _ArmDrawer(Skill):
         if grasp is None or width is None:
             raise SkillFailure(
                 f"{ctx.description.name}: the world model has no handle (graspPose, "
-                f"graspWidth) of {drawer.label}"
+                f"graspWidth) of {drawer.name}"
             )
         pull = float_param(ctx, "pull")
         direction = axis(pose.rotation, 0)  # out of the cabinet
@@ -117,7 +117,7 @@ class _ArmDrawer(Skill):
             await close_gripper(gripper)
             await tracked(
                 ctx,
-                f"{'pulling' if self.opening else 'pushing'} {drawer.label}",
+                f"{'pulling' if self.opening else 'pushing'} {drawer.name}",
                 lambda cb: move_cartesian(
                     arm, to_world_pose(end), speed=float_param(ctx, "speed"), progress=cb
                 ),
@@ -126,7 +126,7 @@ class _ArmDrawer(Skill):
             held = (await gripper.state()).opening
             if held < HOLD_MIN * width:
                 raise SkillFailure(
-                    f"{ctx.description.name}: the handle of {drawer.label} slipped out of the "
+                    f"{ctx.description.name}: the handle of {drawer.name} slipped out of the "
                     f"gripper (pads {held * 1000:.0f} mm apart at the end, the bar is "
                     f"{width * 1000:.0f} mm)"
                 )

@@ -22,6 +22,7 @@ from skill_agent._skill import Skill, SkillContext
 from skill_agent.protocol._skills import HasPropertyCond, SkillDescription
 from skill_agent.skills._params import OBJECT, PLATFORM, SENSOR
 from skill_agent.skills._sensing import (
+    Sensors,
     containing,
     look,
     move_ops,
@@ -30,7 +31,7 @@ from skill_agent.skills._sensing import (
     still_inside,
 )
 from skill_agent.skills._support import element_id, wm_of
-from wm_store import WmClient
+from wm_store import WmClient, display_name
 from wm_store.ontology import Cls, Prop
 from wm_store.protocol import Observation
 
@@ -62,17 +63,19 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
     target = wm.get_element(element_id(ctx, param))
     sensors = sensors_of(ctx)
     if not sensors.devices:
-        raise SkillFailure(f"{ctx.description.name}: no sensor bound to look for {target.id}")
+        raise SkillFailure(
+            f"{ctx.description.name}: no sensor bound to look for {display_name(target)}"
+        )
     seen = await look(wm, target, sensors)
     if not seen:
         told = operator_sighting(wm, target.id)
         if told is None:
             raise SkillFailure(
-                f"{ctx.description.name}: {target.label or target.id} ({target.id}) is not "
-                f"seen by {sensors.names}"
+                f"{ctx.description.name}: {display_name(target)} is not seen by "
+                f"{_sensors(wm, sensors)}"
             )
         await ctx.progress(
-            f"{target.label or target.id} not seen by {sensors.names}; where the operator "
+            f"{display_name(target)} not seen by {_sensors(wm, sensors)}; where the operator "
             f"({_named(wm, told.source)}) saw it {time.time() - told.stamp:.0f} s ago",
             step="located",
         )
@@ -86,7 +89,7 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
     best = seen[0]
     x, y, z = best.pose.translation
     await ctx.progress(
-        f"{target.label or target.id} seen by {_named(wm, best.source)} at "
+        f"{display_name(target)} seen by {_named(wm, best.source)} at "
         f"({x:.3f}, {y:.3f}, {z:.3f}) "
         f"(confidence {best.confidence:.2f}; {len(seen)} sighting(s))",
         step="located",
@@ -94,11 +97,12 @@ async def locate_object(ctx: SkillContext, param: str = "object") -> None:
 
 
 def _named(wm: WmClient, element: str) -> str:
-    """``label (id)`` of an element, for messages (ids alone confuse: the scene camera
-    labelled Camera-1 may have the id Camera-3); the id alone when that is all there is."""
-    found = wm.find_element(element)
-    label = found.label if found is not None else ""
-    return f"{label} ({element})" if label and label != element else element
+    """An element as messages name it (:func:`wm_store.display_name`)."""
+    return display_name(wm.find_element(element), element)
+
+
+def _sensors(wm: WmClient, sensors: Sensors) -> str:
+    return ", ".join(_named(wm, source) for source, _ in sensors.devices) or "no sensor"
 
 
 class Locate(Skill):

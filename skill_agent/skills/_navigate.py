@@ -30,7 +30,7 @@ from skill_agent.skills._support import (
     wm_of,
     world_transform,
 )
-from wm_store import WmClient
+from wm_store import WmClient, display_name
 from wm_store.ontology import Prop
 from wm_store.protocol import Observe, Op, UpdateElement
 from wm_store.reasoners import Transform, quat_from_yaw
@@ -103,7 +103,7 @@ class Navigate(Skill):
         try:
             await tracked(
                 ctx,
-                f"driving to {wm.get_element(goal).label or goal}",
+                f"driving to {display_name(wm.find_element(goal), goal)}",
                 lambda cb: navigate_to(base, target, speed=float_param(ctx, "speed"), progress=cb),
                 step="drive",
             )

@@ -137,7 +137,7 @@ class Pick(Skill):
                     current=current,
                 )
             except NoGraspError as exc:
-                raise SkillFailure(f"pick: {obj.label}: {exc}") from exc
+                raise SkillFailure(f"pick: {obj.name}: {exc}") from exc
 
         plan((await arm.state()).tcp)  # no grasp: fail before anything moves
         try:
@@ -147,17 +147,17 @@ class Pick(Skill):
             inward, offset, lift = self.travel(ctx, grasp.tcp)
             await tracked(
                 ctx,
-                f"approaching {obj.label} ({grasp.strategy} grasp)",
+                f"approaching {obj.name} ({grasp.strategy} grasp)",
                 lambda cb: approach(arm, grasp.tcp, offset, direction=inward, progress=cb),
                 step="approach",
                 end=0.6,
             )
-            await ctx.progress(f"closing on {obj.label}", step="grasp", fraction=0.6)
+            await ctx.progress(f"closing on {obj.name}", step="grasp", fraction=0.6)
             await close_gripper(gripper, float_param(ctx, "force"), expect=obj.label)
             for k, (direction, distance) in enumerate(lift):
                 await tracked(
                     ctx,
-                    f"lifting {obj.label}" if k == 0 else f"pulling {obj.label} out",
+                    f"lifting {obj.name}" if k == 0 else f"pulling {obj.name} out",
                     _straight(arm, distance, direction),
                     step="lift",
                     start=0.7 + 0.3 * k / len(lift),

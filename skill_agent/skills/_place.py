@@ -157,7 +157,7 @@ class Place(Skill):
                 current=tcp_now,
             )
         except NoGraspError as exc:
-            raise SkillFailure(f"place: cannot tell how {obj.label} is held: {exc}") from exc
+            raise SkillFailure(f"place: cannot tell how {obj.name} is held: {exc}") from exc
         radius, occupied = footprint_radius(obj.size), _occupied(wm, target_id, obj.element.id)
         if is_surface(wm, target_id):
             robot = world_transform(wm, element_id(ctx, "robot"))
@@ -168,7 +168,7 @@ class Place(Skill):
             spots = free_spots(box_pose, box_ext, radius, occupied, wall=float_param(ctx, "wall"))
         spots = spots[:SPOTS_TRIED]
         if not spots:
-            raise SkillFailure(f"place: no free spot for {obj.label} in {target.label}")
+            raise SkillFailure(f"place: no free spot for {obj.name} in {target.name}")
         drop = float_param(ctx, "drop")
         rim = box_pose.translation[2] + box_ext[2] / 2
         try:
@@ -192,10 +192,10 @@ class Place(Skill):
                 break
             await ctx.progress(f"spot {k + 1} of {len(spots)} out of reach: {why}", step="approach")
         else:
-            raise SkillFailure(f"place: no spot in {target.label} within reach: {why}")
+            raise SkillFailure(f"place: no spot in {target.name} within reach: {why}")
         _, _, back, distance = self.travel(ctx, goal)
         try:
-            await ctx.progress(f"releasing {obj.label}", step="release", fraction=0.7)
+            await ctx.progress(f"releasing {obj.name}", step="release", fraction=0.7)
             await release(gripper)
             await tracked(
                 ctx,

@@ -18,7 +18,7 @@ from skill_agent._errors import SkillFailure
 from skill_agent._skill import SkillContext
 from skill_agent.primitives._grasp import extents
 from skill_agent.primitives.poses import Vec3, to_wm_pose
-from wm_store import WmClient, WmError
+from wm_store import WmClient, WmError, display_name
 from wm_store.ontology import Prop
 from wm_store.protocol import Element, Op, Pose, UpdateElement, Value
 from wm_store.reasoners import MissingDataError, Transform
@@ -103,7 +103,13 @@ class Geometry:
 
     @property
     def label(self) -> str:
+        """The label the devices know the element by (its id when it has none)."""
         return self.element.label or self.element.id
+
+    @property
+    def name(self) -> str:
+        """How messages name the element (:func:`wm_store.display_name`)."""
+        return display_name(self.element)
 
     def require(self, what: str) -> tuple[Transform, Vec3]:
         """Pose and extents, or SkillFailure naming what is missing."""

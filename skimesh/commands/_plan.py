@@ -5,12 +5,17 @@ A dry run for people who program robots: it reads the world model and the regist
 with ``--emit-pddl DIR``, writes ``domain.pddl`` and ``problem.pddl`` for inspection with other
 planners. ``skimesh task submit --goal ... --emit-pddl DIR`` writes the same files before it
 submits. Exit codes: 0 planned, 2 unsolvable, 4 other errors.
+
+The text schedule names elements as everything else does (:func:`wm_store.display_name`:
+``Camera-1``, or ``Pulley-4 (Gear-1)`` where the label and the id differ); ``--json`` keeps
+the ids.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import anyio
@@ -19,12 +24,13 @@ import msgspec
 from task_agent import PlanningError, UnsolvableError, parse_goal
 from task_agent.discovery import agents_from_view
 from task_agent.domain import build_task
-from task_agent.planning import Planner, to_partial_order
-from wm_store import WmClient
+from task_agent.planning import PartialOrderPlan, Planner, to_partial_order
+from wm_store import WmClient, display_name
+from wm_store.protocol import Element
 
 from ._connect import wm_session
 
-__all__ = ["add_arguments", "emit_pddl", "plan_goal"]
+__all__ = ["add_arguments", "emit_pddl", "named_order", "plan_goal"]
 
 EXIT_UNSOLVABLE = 2
 
@@ -61,6 +67,26 @@ async def emit_pddl(
     return await anyio.to_thread.run_sync(planner.emit_pddl, task, directory)
 
 
+def named_order(order: PartialOrderPlan, find: Callable[[str], Element | None]) -> PartialOrderPlan:
+    """``order`` with each parameter that is an element id (``find`` finds it) replaced by the
+    element's :func:`~wm_store.display_name`, for printing."""
+
+    def named(value: str) -> str:
+        element = find(value)
+        return value if element is None else display_name(element)
+
+    steps = tuple(
+        msgspec.structs.replace(
+            s,
+            step=msgspec.structs.replace(
+                s.step, params={k: named(v) for k, v in s.step.params.items()}
+            ),
+        )
+        for s in order.steps
+    )
+    return msgspec.structs.replace(order, steps=steps)
+
+
 async def plan_goal(args: argparse.Namespace) -> int:
     """The body of ``skimesh task plan``."""
     async with wm_session(args, author="planner-cli") as wm:
@@ -78,9 +104,10 @@ async def plan_goal(args: argparse.Namespace) -> int:
         except PlanningError as e:
             print(f"planning failed: {e}", file=sys.stderr)
             return 4
-    order = to_partial_order(plan)
+        order = to_partial_order(plan)
+        shown = order if args.json else named_order(order, wm.find_element)
     if args.json:
-        sys.stdout.write(msgspec.json.encode(order).decode() + "\n")
+        sys.stdout.write(msgspec.json.encode(shown).decode() + "\n")
     else:
-        print(order.render())
+        print(shown.render())
     return 0

@@ -1,9 +1,11 @@
-"""Text rendering of world-model content for the terminal (trees, element lines, values)."""
+"""Text rendering of world-model content for the terminal (trees, element lines, values);
+elements are named by :func:`wm_store.display_name`."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
+from wm_store import display_name
 from wm_store.protocol import (
     Color,
     Element,
@@ -56,11 +58,12 @@ _SHOWN = ("pose", "position", "size", "available", "doorOpen", "heating", "mass"
 
 
 def element_line(element: Element, shown: Iterable[str] = _SHOWN) -> str:
-    label = f' "{element.label}"' if element.label else ""
+    """``Pulley-4 (Gear-1) [Gear]  pose=...``: the element's name (:func:`wm_store.display_name`),
+    its class and the ``shown`` properties it has."""
     props = " ".join(
         f"{k}={format_value(element.properties[k])}" for k in shown if k in element.properties
     )
-    return f"{element.id}{label} ({element.type})" + (f"  {props}" if props else "")
+    return f"{display_name(element)} [{element.type}]" + (f"  {props}" if props else "")
 
 
 def render_tree(state: SceneState, roots: Iterable[str] | None = None) -> str:

@@ -105,6 +105,9 @@ async def run_mission(
 
 
 def _labels(stack: Stack) -> Callable[[str], str]:
+    """Element id -> scenario label, for the physics checks (the simulation names its bodies
+    by label); what the output shows is :func:`wm_store.display_name`."""
+
     def label_of(element_id: str) -> str:
         element = stack.wm.find_element(element_id)
         return element.label if element is not None and element.label else element_id

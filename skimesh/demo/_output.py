@@ -11,7 +11,9 @@ since the task began::
 A step's progress events are many (a motion reports every 2 %); a line is printed when its
 message changes, not for every fraction (and not for the agent's "holds devices" lines).
 Plans print as a table in start order with the partial order ("after": steps that must
-finish first) and the estimated schedule.
+finish first) and the estimated schedule. Elements are named as everywhere
+(:func:`wm_store.display_name`: ``Gear-1``, or ``Pulley-4 (Gear-1)`` where the label and the
+id differ), through the ``call_text`` the demo gives.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ from skill_agent import SkillError
 from skill_agent.runtime import AgentConfig
 from task_agent import GoalParseError, TaskError, parse_goal
 from task_agent.protocol import TaskOptions
-from wm_store import WmClient, WmError
+from wm_store import WmClient, WmError, display_name
 from wm_store.protocol import Value
 
 from ..errors import DemoError
@@ -166,8 +166,9 @@ class _Live:
         return self.world.snapshot.time if self.world is not None else 0.0
 
     def label_of(self, element_id: str) -> str:
+        """How the output and the recording name an element (:func:`wm_store.display_name`)."""
         element = self.wm.find_element(element_id) if self.wm is not None else None
-        return element.label if element is not None and element.label else element_id
+        return display_name(element, element_id)
 
     def call_text(self, agent: str, skill: str, params: Mapping[str, Value]) -> str:
         if self._calls is None:

@@ -10,6 +10,8 @@ super- and sub-properties, one value per property, derived ``empty``). The rules
 
 from __future__ import annotations
 
+from skill_agent.parameters import bindings
+
 from ._model import ROOT_TYPE, ActionSchema, ForallDelete, Lit
 from ._skills import Draft
 from ._vocabulary import Vocabulary
@@ -113,4 +115,5 @@ def action_schema(vocab: Vocabulary, d: Draft, name: str) -> ActionSchema:
         delete=tuple(delete),
         forall_delete=tuple(forall),
         runtime_only=tuple(d.runtime_only),
+        shared=tuple(v for v in bindings(d.desc).values() if v not in d.agent.hardware),
     )

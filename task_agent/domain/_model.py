@@ -76,6 +76,10 @@ class ActionSchema(msgspec.Struct, frozen=True, kw_only=True):
     delete: tuple[Lit, ...] = ()
     forall_delete: tuple[ForallDelete, ...] = ()
     runtime_only: tuple[str, ...] = ()
+    shared: tuple[str, ...] = ()
+    """Bound devices the agent's configuration binds that are not its robot's own (a fixed
+    camera several robots use): an agent locks a device for its own runs only, so these order
+    no step of another agent."""
 
 
 class PlanningTask(msgspec.Struct, frozen=True, kw_only=True):

@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 from skill_agent import WorldView
 from skill_agent.conditions import Atom, ConditionRegistry, describe, symbolic
+from skill_agent.parameters import bindings
 from skill_agent.protocol import Condition, SkillDescription
 
 from ..discovery import AgentInfo
@@ -62,6 +63,7 @@ def draft(
     variables: dict[str, str] = {}
     bound: dict[str, str] = {}
     owned: list[str] = []
+    pinned = bindings(desc)  # the devices the run will lock, as the agent published them
     for spec in desc.parameters:
         if spec.type not in onto.classes:
             if spec.name in used:
@@ -71,7 +73,9 @@ def draft(
                     f"needs a {spec.type} value for '{spec.name}', which the planner cannot choose"
                 )
             continue
-        if spec.kind == "hardware":
+        if spec.kind == "hardware" and spec.name in pinned:  # the agent's configuration's
+            bound[spec.name] = pinned[spec.name]
+        elif spec.kind == "hardware":
             mine = [h for h in agent.hardware if element_is(view, h, spec.type)]
             if not mine and spec.optional and spec.name not in used:
                 continue

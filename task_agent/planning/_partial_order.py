@@ -167,14 +167,20 @@ def _hardware(task: PlanningTask) -> set[str]:
     return found
 
 
+def _resources(task: PlanningTask, step: PlanStep, hardware: set[str]) -> frozenset[str]:
+    """What ``step`` holds: its agent, and the devices it binds but the ones its agent shares
+    with others (locked per agent: they order only this agent's steps, as the agent does)."""
+    action = task.actions.get(step.action)
+    shared = set(action.shared) if action is not None else set()
+    devices = (v for v in step.params.values() if v in hardware and v not in shared)
+    return frozenset({f"agent {step.agent}", *devices})
+
+
 def _build(
     task: PlanningTask, steps: Sequence[PlanStep], effects: Sequence[StepEffects]
 ) -> tuple[list[float], list[float], list[Edge], list[frozenset[str]]]:
     hardware = _hardware(task)
-    resources = [
-        frozenset({f"agent {s.agent}", *(v for v in s.params.values() if v in hardware)})
-        for s in steps
-    ]
+    resources = [_resources(task, s, hardware) for s in steps]
     access = [_access(e, r) for e, r in zip(effects, resources, strict=True)]
     n = len(steps)
     edges: list[Edge] = []

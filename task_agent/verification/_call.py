@@ -39,7 +39,7 @@ from skill_agent.conditions import (
     evaluate,
     parameters_of,
 )
-from skill_agent.parameters import describe_query, is_value_kind, matching, specify
+from skill_agent.parameters import bindings, describe_query, is_value_kind, matching, specify
 from skill_agent.protocol import (
     AndCond,
     Condition,
@@ -183,7 +183,7 @@ class CallChecker:
                 desc,
                 att.given,
                 view,
-                hardware={d: d for d in agent.devices},
+                hardware={**{d: d for d in agent.devices}, **bindings(desc)},
                 robot=agent.robot,
                 registry=_AssumeCustom(),
             )

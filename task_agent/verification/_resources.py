@@ -1,17 +1,38 @@
 """Resources: the devices a call locks, and calls that may run at the same time locking the
-same device (an agent runs one skill per device at a time and refuses the second start)."""
+same device (an agent runs one skill per device at a time and refuses the second start).
+
+Locks are per agent: two agents may use a device their configurations both bind (a fixed
+camera) at once, so such a device conflicts only between calls of one agent; the robot and
+its parts conflict across agents too (two agents of one split robot)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import NamedTuple
 
 from skill_agent import WorldView
+from skill_agent.parameters import bindings
+from wm_store import display_name
 from wm_store.scene import SceneState, id_sort_key
 
 from ..taskfile import CallSite, where
 from ._attempt import Attempt, is_of
 
-__all__ = ["call_locks", "resource_problems"]
+__all__ = ["Sharing", "call_locks", "resource_problems", "sharing"]
+
+
+class Sharing(NamedTuple):
+    """A call's agent (``""``: not known yet) and the devices it binds that the agent shares
+    with others (its configuration's bindings that are not its robot's own)."""
+
+    agent: str
+    shared: frozenset[str]
+
+
+def sharing(att: Attempt, *, fixed: bool) -> Sharing:
+    shared = frozenset(v for v in bindings(att.desc).values() if v not in att.agent.hardware)
+    return Sharing(att.agent.name if fixed else "", shared)
+
 
 _AGENT = "agent:"
 """The lock of a whole agent whose devices for a call are not known."""
@@ -24,6 +45,8 @@ def call_locks(att: Attempt, view: WorldView, *, fixed: bool) -> set[str]:
     known = att.values if fixed and att.values is not None else att.given
     for spec in att.desc.parameters:
         value = known.get(spec.name)
+        if value is None and spec.kind == "hardware":  # the device the agent binds, if any
+            value = bindings(att.desc).get(spec.name)
         if spec.kind != "hardware" or (value is None and (spec.optional or not fixed)):
             continue
         if value is None:
@@ -37,15 +60,23 @@ def call_locks(att: Attempt, view: WorldView, *, fixed: bool) -> set[str]:
 
 
 def resource_problems(
-    calls: Mapping[str, CallSite], locks: Mapping[str, set[str]], state: SceneState
+    calls: Mapping[str, CallSite],
+    locks: Mapping[str, set[str]],
+    state: SceneState,
+    sharing: Mapping[str, Sharing] | None = None,
 ) -> list[tuple[str, str]]:
     """``(call path, problem)`` for each call that may run at the same time as an earlier one
-    locking a device it locks too (``locks``: each call's :func:`call_locks`)."""
+    locking a device it locks too (``locks``: each call's :func:`call_locks`; ``sharing``:
+    each call's :func:`sharing`, so a shared device of two agents is no conflict)."""
     out = []
+    alone = Sharing("", frozenset())
     for site in calls.values():
         mine, found = locks.get(site.path, set()), []
         for other in site.parallel:
             common = mine & locks.get(other, set())
+            a, b = (sharing or {}).get(site.path, alone), (sharing or {}).get(other, alone)
+            if a.agent and b.agent and a.agent != b.agent:
+                common -= a.shared | b.shared
             if common and calls[other].order < site.order:
                 what = ", ".join(_device(d, state) for d in sorted(common, key=id_sort_key))
                 found.append(f"{where(other, calls[other].call)} (both lock {what})")
@@ -62,6 +93,4 @@ def resource_problems(
 def _device(lock: str, state: SceneState) -> str:
     if lock.startswith(_AGENT):
         return f"agent {lock[len(_AGENT) :]} (its devices for these calls are not known)"
-    element = state.get(lock)
-    label = element.label if element is not None else ""
-    return f"{lock} ({label})" if label and label != lock else lock
+    return display_name(state.get(lock), lock)

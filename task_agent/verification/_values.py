@@ -7,6 +7,7 @@ from __future__ import annotations
 from skill_agent import ParameterTypeError, WorldView
 from skill_agent.parameters import check_kind, describe_query, is_value_kind, matching
 from skill_agent.protocol import ParamSpec
+from wm_store import display_name
 from wm_store.ontology import did_you_mean, with_article
 from wm_store.protocol import Query, Value
 
@@ -38,7 +39,10 @@ def check_literal(
     element_id = raw
     if raw.startswith(LABEL_PREFIX):
         label = raw[len(LABEL_PREFIX) :]
-        found = [e.id for e in view.resolve_element(Query(label=label))]
+        labelled = view.resolve_element(Query(label=label))
+        found = [e.id for e in labelled]
+        if len(found) > 1:  # an agent shares its robot's label: the label means the robot
+            found = [e.id for e in labelled if not _agent_or_skill(view, e.type)] or found
         if len(found) != 1:
             labels = {e.label for e in view.resolve_element(type=spec.type) if e.label}
             why = (
@@ -56,6 +60,11 @@ def check_literal(
     return element_id
 
 
+def _agent_or_skill(view: WorldView, cls: str) -> bool:
+    onto = view.ontology
+    return any(c in onto.classes and onto.is_a(cls, c) for c in ("Agent", "Skill"))
+
+
 def _element(spec: ParamSpec, element_id: str, view: WorldView, agent: AgentInfo) -> str:
     onto = view.ontology
     element = view.find_element(element_id)
@@ -66,18 +75,21 @@ def _element(spec: ParamSpec, element_id: str, view: WorldView, agent: AgentInfo
             f": no element '{element_id}' in the world model{hint} Elements of class "
             f"{spec.type}: {listing(known)}"
         )
+    name = display_name(element)
     if not onto.is_a(element.type, spec.type):
         chain = " < ".join(onto.superclasses(element.type))
-        return (
-            f" takes {with_article(spec.type)}; {element_id} is "
-            f"{with_article(element.type)} ({chain})"
-        )
+        return f" takes {with_article(spec.type)}; {name} is {with_article(element.type)} ({chain})"
     if spec.partial is not None and element_id not in matching(view, spec):
-        return f": {element_id} does not match ({describe_query(spec.partial)})"
-    if spec.kind == "hardware" and agent.robot and element_id not in agent.hardware:
-        mine = [d for d in agent.hardware if is_of(view, d, spec.type)]
+        return f": {name} does not match ({describe_query(spec.partial)})"
+    bound = element_id == spec.default  # the device the agent's configuration binds
+    if spec.kind == "hardware" and agent.robot and not bound and element_id not in agent.hardware:
+        mine = [
+            display_name(view.find_element(d), d)
+            for d in agent.hardware
+            if is_of(view, d, spec.type)
+        ]
         return (
-            f": {element_id} is not a device of agent {agent.name}; its {spec.type} "
+            f": {name} is not a device of agent {agent.name}; its {spec.type} "
             f"devices: {listing(mine)}"
         )
     return ""

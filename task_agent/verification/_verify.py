@@ -23,7 +23,7 @@ from ..protocol import Call, Parallel, TaskFile, VerifyProblem
 from ..taskfile import ROOT_PATH, BlockSite, CallSite, assign_ids, blocks, walk, where
 from ._attempt import Attempt, Earlier, Kind
 from ._call import CallChecker, broken
-from ._resources import call_locks, resource_problems
+from ._resources import Sharing, call_locks, resource_problems, sharing
 from ._scene import SceneView, changes, clashes, scene_copy
 
 __all__ = ["Report", "StepPrediction", "check", "verify"]
@@ -81,6 +81,7 @@ class _Verifier:
         self.steps: dict[str, StepPrediction] = {}
         self.params: dict[str, dict[str, Value]] = {}
         self.locks: dict[str, set[str]] = {}
+        self.sharing: dict[str, Sharing] = {}
         self.starts: dict[str, tuple[SceneState, Attempt]] = {}
         """The state each call in a parallel block starts in, with its attempt."""
         earlier = Earlier(self.ids, self.calls, self.descs, self.params)
@@ -258,6 +259,7 @@ class _Verifier:
         for kind, message in att.warnings:
             self.report(site.path, kind, head + message, "warning")
         self.locks[site.path] = call_locks(att, view, fixed=len(found) == 1)
+        self.sharing[site.path] = sharing(att, fixed=len(found) == 1)
         if att.values is None:
             return
         hardware = {p.name for p in att.desc.parameters if p.kind == "hardware"}
@@ -290,7 +292,7 @@ class _Verifier:
         )
 
     def resources(self) -> None:
-        for path, message in resource_problems(self.calls, self.locks, self.state):
+        for path, message in resource_problems(self.calls, self.locks, self.state, self.sharing):
             self.report(path, "resource", message)
 
 

@@ -37,7 +37,7 @@ def test_wm_client_commands(router_endpoint: str, mesh_name: str, tmp_path: Path
 
         tree = skimesh("wm", *common, "tree")
         assert tree.returncode == 0, tree.stderr
-        assert "contain → Gear-1" in tree.stdout
+        assert "contain → spur gear 1 (Gear-1) [Gear]" in tree.stdout
 
         listed = skimesh("wm", *common, "ls", "Part", "--json")
         parts = json.loads(listed.stdout)

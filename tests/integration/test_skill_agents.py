@@ -144,9 +144,10 @@ async def connected(site: Site) -> AsyncIterator[tuple[Mesh, WmClient]]:
 
 
 async def part_in_box(wm: WmClient) -> tuple[str, str]:
-    """A fresh PartBox holding a fresh Gear; returns (part, box)."""
-    box = await wm.add_element("PartBox", f"box-{uuid.uuid4().hex[:6]}")
-    return await wm.add_branch(box, "contain", "Gear", "gear"), box
+    """A fresh PartBox holding a fresh Gear (labels are unique); returns (part, box)."""
+    tag = uuid.uuid4().hex[:6]
+    box = await wm.add_element("PartBox", f"box-{tag}")
+    return await wm.add_branch(box, "contain", "Gear", f"gear-{tag}"), box
 
 
 async def gripper(wm: WmClient, label: str) -> str:

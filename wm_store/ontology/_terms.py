@@ -104,8 +104,10 @@ def with_article(name: str) -> str:
 
 def did_you_mean(name: str, candidates: Iterable[str]) -> str:
     """``; did you mean 'X'?`` naming the closest candidates (case-insensitive first), else
-    ``.``, to end an error message."""
-    pool = sorted(candidates)
+    ``.``, to end an error message. Each name is suggested once, however often ``candidates``
+    holds it; give only names of the kind asked for (elements for an element, classes for a
+    class), so the suggestion can stand where the unknown name stood."""
+    pool = sorted(set(candidates))
     folded = {c.lower(): c for c in pool}
     found = [folded[name.lower()]] if name.lower() in folded else []
     found = found or difflib.get_close_matches(name, pool, n=3, cutoff=0.6)

@@ -5,7 +5,9 @@ state) and the client (its replica), so both index and answer the same way.
 - :class:`SceneState`: elements, relations and native indexes (type, label, relations in both
   directions, spatial parent, sorted numeric properties); applies deltas, validates nothing.
 - :func:`resolve`, :func:`match_relations`, :func:`id_sort_key`: read queries.
-- :func:`apply_transaction`: validate ops against the ontology and apply them all, or none.
+- :func:`apply_transaction`: validate ops against the ontology and apply them all, or none,
+  every name naming one element (``_names``: ids vs labels, unique labels, assigned ids that
+  avoid labels; its ``display_name`` is public as :func:`wm_store.display_name`).
 - :func:`merge_observation` / :func:`resolve_observations`: multi-source property resolution.
 - :func:`min_cardinality_violations`: the minimum-cardinality report (``CheckCardinality``).
 """

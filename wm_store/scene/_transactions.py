@@ -12,7 +12,9 @@ as before. Rules enforced here:
   per element, no cycles;
 - maximum cardinalities stated in the ontology;
 - compare-and-set: ``expect_rev`` on an element op must equal the element's current ``rev``;
-- ids are store-assigned ``<Type>-<n>`` and never reused (an explicit id must be fresh).
+- ids are store-assigned ``<Type>-<n>`` and never reused (an explicit id must be fresh);
+- every name names one element: no label equals another element's id, labels are unique
+  within their kind, and assigned ids skip names used as labels (:mod:`wm_store.scene._names`).
 """
 
 from __future__ import annotations
@@ -26,7 +28,6 @@ from rdflib import Graph
 
 from wm_store._errors import (
     ConflictError,
-    DuplicateIdError,
     ElementNotFoundError,
     TreeShapeError,
     ValidationError,
@@ -57,8 +58,9 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
+from wm_store.scene._names import NameGuard, check_explicit_form, display_name
 from wm_store.scene._resolution import merge_observation, resolve_observations
-from wm_store.scene._state import SceneState, Undo, parse_id
+from wm_store.scene._state import SceneState, Undo
 
 __all__ = ["SELF", "TxnResult", "apply_transaction"]
 
@@ -91,6 +93,7 @@ def apply_transaction(
     txn = _Txn(state, ontology, revision, time.time() if now is None else now)
     txn.parsed_terms = parsed_terms or {}
     counters = dict(state.counters)
+    txn.names = NameGuard(state, counters, _labels_written(ops))
     try:
         for index, op in enumerate(ops):
             try:
@@ -105,6 +108,11 @@ def apply_transaction(
     return TxnResult(txn.deltas, txn.undo, txn.ids, txn.ontology)
 
 
+def _labels_written(ops: Sequence[Op]) -> list[str]:
+    """The labels ``ops`` give elements (assigned ids must not be among them)."""
+    return [op.label for op in ops if isinstance(op, AddElement | UpdateElement) and op.label]
+
+
 class _Txn:
     def __init__(self, state: SceneState, ontology: Ontology, revision: int, now: float) -> None:
         self.state = state
@@ -115,6 +123,7 @@ class _Txn:
         self.undo: list[Undo] = []
         self.ids: dict[str, str] = {}
         self.parsed_terms: Mapping[int, Graph] = {}
+        self.names = NameGuard(state, dict(state.counters), ())
 
     # ------------------------------------------------------------------ plumbing
 
@@ -131,10 +140,13 @@ class _Txn:
             raise ElementNotFoundError(f"no element {ref_or_id!r}")
         return element
 
+    def _named(self, element_id: str) -> str:
+        return display_name(self.state.get(element_id), element_id)
+
     def _check_rev(self, element: Element, expect_rev: int | None) -> None:
         if expect_rev is not None and element.rev != expect_rev:
             raise ConflictError(
-                f"{element.id} is at rev {element.rev}, not the expected {expect_rev}; "
+                f"{display_name(element)} is at rev {element.rev}, not the expected {expect_rev}; "
                 "re-read it and retry"
             )
 
@@ -190,7 +202,8 @@ class _Txn:
         element_type = self.ontology.check_class(op.type)
         for name, value in op.properties.items():
             self._check_property(element_type, name, value)
-        element_id = self._new_id(element_type, op.id)
+        element_id = self._new_id(element_type, op.id, op.label)
+        self.names.check_label(self.ontology, element_id, element_type, op.label)
         ref = op.ref or f"#{index}"
         if ref in self.ids:
             raise ValidationError(f"ref {ref!r} is used twice in this transaction")
@@ -211,21 +224,13 @@ class _Txn:
             o = element_id if rel.object in (SELF, ref) else self._id(rel.object)
             self._set_relation(Relation(s, rel.predicate, o))
 
-    def _new_id(self, element_type: str, explicit: str) -> str:
-        used = self.state.counters.get(element_type, 0)
+    def _new_id(self, element_type: str, explicit: str, label: str) -> str:
         if not explicit:
-            return f"{element_type}-{used + 1}"
-        parsed = parse_id(explicit)
-        if parsed is None or parsed[0] != element_type:
-            raise DuplicateIdError(
-                f"explicit id {explicit!r} must have the form {element_type}-<n>"
-            )
-        if explicit in self.state or parsed[1] <= used:
-            raise DuplicateIdError(
-                f"id {explicit!r} is taken or was used before (ids are never reused); "
-                f"the next free one is {element_type}-{used + 1}"
-            )
-        return explicit
+            return self.names.new_id(element_type, label)
+        check_explicit_form(
+            element_type, explicit, self.state.counters.get(element_type, 0), self.state
+        )
+        return self.names.explicit_id(explicit)
 
     def _update(self, op: UpdateElement) -> None:
         element = self._need(op.id)
@@ -241,6 +246,8 @@ class _Txn:
                 props[name] = value
         observations = {k: v for k, v in element.observations.items() if k in props}
         label = element.label if op.label is None else op.label
+        if label != element.label:
+            self.names.check_label(self.ontology, element.id, element.type, label)
         self._emit(
             ElementPut(
                 self._stamp(element, properties=props, observations=observations, label=label)
@@ -297,15 +304,16 @@ class _Txn:
         current = self.state.parent(rel.object)
         if current is not None:
             raise TreeShapeError(
-                f"{rel.object} already has the spatial parent {current.subject} "
-                f"({current.predicate}); unset that relation first to move it"
+                f"{self._named(rel.object)} already has the spatial parent "
+                f"{self._named(current.subject)} ({current.predicate}); unset that relation "
+                "first to move it"
             )
         walk: str | None = rel.subject
         while walk is not None:
             if walk == rel.object:
                 raise TreeShapeError(
                     f"{rel.predicate}({rel.subject}, {rel.object}) would make a cycle: "
-                    f"{rel.object} is an ancestor of {rel.subject}"
+                    f"{self._named(rel.object)} is an ancestor of {self._named(rel.subject)}"
                 )
             parent = self.state.parent(walk)
             walk = parent.subject if parent is not None else None

@@ -142,7 +142,7 @@ async def test_parallel_all_fails_when_one_fails_and_never_shares_a_device(
         assert sorted(children_of(core, run_id)) == [("fail", "execution"), ("wait", "preempted")]
         run_id, reason, message = await run(core, "same_device")
     assert reason == "execution"
-    assert f"device {kitting['left']} is busy" in message
+    assert f"device r1-left ({kitting['left']}) is busy" in message
 
 
 async def test_retry_attempts_then_fails(make_agent: AgentFactory, probe: Probe) -> None:

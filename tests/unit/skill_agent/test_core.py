@@ -59,7 +59,9 @@ async def test_start_refusals_are_precise_and_nothing_moves(
         holder = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
         with pytest.raises(ResourceBusyError) as busy:
             await core.start(StartRun(skill="slow", params={"gripper": kitting["left"]}))
-        assert f"device {kitting['left']} is busy: run {holder.run_id} holds it" in str(busy.value)
+        assert f"device r1-left ({kitting['left']}) is busy: run {holder.run_id} holds it" in str(
+            busy.value
+        )
         await kitting.move(kitting["gear2"], kitting["right"])  # the right gripper is full
         with pytest.raises(PreconditionError, match=f"{kitting['right']} contains") as pre:
             await core.start(
@@ -172,7 +174,10 @@ async def test_queued_runs_wait_in_fifo_order_never_interleaved(
         assert end <= begin  # one after the other, in the order they were queued
     assert all(result_of(recorder, r).success for r in order)
     pending = [e for e in recorder.of(queued[0].run_id) if isinstance(e, Progress)][:2]
-    assert [p.message for p in pending] == [f"queued for devices: {left}", "devices acquired"]
+    assert [p.message for p in pending] == [
+        f"queued for devices: r1-left ({left})",
+        "devices acquired",
+    ]
 
 
 async def test_queued_run_checks_preconditions_when_its_turn_comes(
@@ -302,7 +307,7 @@ async def test_status_runs_and_subscriptions(make_agent: AgentFactory, probe: Pr
         n = len(recorder.events)
         await core.wait((await core.start(StartRun(skill="noop"))).run_id)
         assert len(recorder.events) == n
-        assert started.inferred["gripper"].startswith(str(started.params["gripper"]))
+        assert f"({started.params['gripper']}): " in started.inferred["gripper"]  # label (id)
 
 
 async def test_event_loop_never_blocks(

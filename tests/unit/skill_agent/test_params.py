@@ -444,7 +444,7 @@ async def test_element_values_are_checked() -> None:
         with pytest.raises(ParameterTypeError) as wrong:
             specify(PICK, {"box": w["box_a"], "gear": w["box_b"]}, w.wm, robot=w["robot"])
         assert str(wrong.value) == (
-            "parameter 'gear' of skill 'pick' takes a Gear; PartBox-2 is a PartBox "
+            "parameter 'gear' of skill 'pick' takes a Gear; box-b (PartBox-2) is a PartBox "
             "(PartBox < Box < Container < PhysicalObject)"
         )
         with pytest.raises(ParameterTypeError, match="takes an element id \\(a Gear\\), got 3"):

@@ -18,7 +18,6 @@ from skill_agent import ParameterError, SkillLoadError
 from skill_agent.conditions import evaluate
 from skill_agent.parameters import specify
 from skill_agent.runtime import (
-    WiringError,
     bind_devices,
     bind_hardware,
     element_for_label,
@@ -29,7 +28,7 @@ from skill_agent.server import agent_registration
 from skill_agent.skills import Locate, Pick
 from skill_agent.skills._params import not_full
 from skimesh.commands.agent import scenario_config_path
-from wm_store import InMemoryTransport, WmClient
+from wm_store import DuplicateLabelError, InMemoryTransport, NameConflictError, WmClient
 from wm_store.ontology import Ontology, Prop
 from wm_store.protocol import AddElement, Relation
 from wm_store.server import WmService, WmStore
@@ -92,7 +91,8 @@ async def test_drivers_are_bound_to_the_registered_devices_by_label(wm: WmClient
         s["r1-camera"]: drivers["r1-camera"],
         s["Camera-1"]: drivers["Camera-1"],
     }
-    assert s["Camera-1"] != "Camera-1", "labels and ids differ: the overhead camera came third"
+    assert s["Camera-1"] == "Camera-1", "a label of the form <its class>-<n> is its id"
+    assert s["r1-camera"] != "Camera-1", "the robot's camera, added first, skipped that id"
     assert bind_hardware(wm, config.hardware, robot=robot) == {"sensor": s["Camera-1"]}
 
 
@@ -103,12 +103,13 @@ async def test_a_label_shared_by_an_agent_and_its_robot_means_the_robot(wm: WmCl
     assert element_for_label(wm, "r1") == robot
 
 
-async def test_several_elements_with_one_label_prefer_the_agents_own(wm: WmClient) -> None:
+async def test_a_device_label_names_one_element(wm: WmClient) -> None:
     s = await scene(wm, "kitting")
-    await wm.transact([AddElement(type="Camera", label="r1-camera")])  # a stray namesake
-    with pytest.raises(WiringError, match=r"'r1-camera': 2 elements"):
-        element_for_label(wm, "r1-camera")
-    assert element_for_label(wm, "r1-camera", robot=s["r1"]) == s["r1-camera"]
+    with pytest.raises(DuplicateLabelError, match=rf"'r1-camera'.*{s['r1-camera']}"):
+        await wm.transact([AddElement(type="Camera", label="r1-camera")])  # a stray namesake
+    with pytest.raises(NameConflictError, match=rf"'{s['r1-camera']}'.*r1-camera"):
+        await wm.transact([AddElement(type="Camera", label=s["r1-camera"])])
+    assert element_for_label(wm, "r1-camera") == s["r1-camera"]
 
 
 async def test_an_unknown_label_is_a_load_error_naming_it(wm: WmClient) -> None:
@@ -148,8 +149,8 @@ async def test_a_bound_parameter_gets_the_configured_device(wm: WmClient) -> Non
     )
     assert asked.values["sensor"] == s["Camera-1"]
     assert asked.inferred["sensor"] == (
-        f"{s['Camera-1']}: this agent's 'sensor' device, bound by its configuration "
-        f"({s['r1-camera']} was asked for)"
+        "Camera-1: this agent's 'sensor' device, bound by its configuration "
+        f"(r1-camera ({s['r1-camera']}) was asked for)"
     )
     unbound = specify(Locate.description, {**given, "sensor": s["r1-camera"]}, wm, robot=robot)
     assert unbound.values["sensor"] == s["r1-camera"], "without a binding the request wins"
@@ -176,7 +177,9 @@ async def test_optional_hardware_takes_the_agents_one_device(wm: WmClient) -> No
     bound = {"sensor": s["Camera-1"], "platform": s["Worktop-1"]}
     spec = specify(Locate.description, given, wm, hardware=bound, robot=robot)
     assert spec.values["platform"] == s["Worktop-1"]
-    assert spec.inferred["platform"] == f"{s['Worktop-1']}: this agent's 'platform' device"
+    assert (
+        spec.inferred["platform"] == f"Worktop-1 ({s['Worktop-1']}): this agent's 'platform' device"
+    )
     # the agent's one device of the class, offered but not bound to the name
     offered = {"sensor": s["Camera-1"], "extra": s["Worktop-1"]}
     spec = specify(Locate.description, given, wm, hardware=offered, robot=robot)

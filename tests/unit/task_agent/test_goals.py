@@ -26,6 +26,9 @@ from task_agent import (
     parse_goal,
 )
 from tests.assets.planning import KittingScene, add_microwave, kitting_scene
+from wm_store import DuplicateLabelError
+from wm_store.protocol import AddElement, UpdateElement
+from wm_store.scene import apply_transaction
 
 
 @pytest.fixture(scope="module")
@@ -113,12 +116,36 @@ def test_error_columns(scene: KittingScene) -> None:
     assert info.value.column == len("contain(KitBox-1, Gear-1) and contain(KitBox-1, ") + 1
 
 
-def test_ambiguous_label() -> None:
+def test_a_label_names_one_element() -> None:
     scene = kitting_scene(1, 1)
-    add_microwave(scene, station=0, content="cold gear")
-    add_microwave(scene, station=1, content="hot gear")
-    with pytest.raises(GoalParseError, match="the label 'oven' is ambiguous: Microwave-1, Mic"):
-        parse_goal("heating(oven)", scene.view)
+    oven, _ = add_microwave(scene, station=0, content="cold gear")
+    with pytest.raises(DuplicateLabelError, match=rf"'oven'.*oven \({oven}\)"):
+        add_microwave(scene, station=1, content="hot gear")  # the store refuses a namesake
+    assert "heating" in str(parse_goal("heating(oven)", scene.view))
+
+
+def test_suggestions_for_an_element_are_element_names_once() -> None:
+    scene = kitting_scene(1, 1)  # r1 registers its skills: elements labelled pick, place, ...
+    with pytest.raises(GoalParseError) as info:
+        parse_goal("contain(KitBox-1, placee)", scene.view)
+    assert "'place'" not in str(info.value), "a skill is no element of a goal"
+    state = scene.view.state
+    apply_transaction(
+        state, scene.view.ontology, [AddElement(type="Bolt", label="Bolt-1")], revision=99
+    )
+    with pytest.raises(GoalParseError) as info:
+        parse_goal("contain(KitBox-1, Bolt-11)", scene.view)
+    assert str(info.value).count("'Bolt-1'") == 1, "an id that is also its label, named once"
+
+
+def test_a_label_an_agent_shares_with_its_robot_means_the_robot() -> None:
+    scene = kitting_scene(1, 1)
+    state, onto = scene.view.state, scene.view.ontology
+    (agent,) = state.ids_with_label("r1")
+    robot = next(iter(state.subjects(agent, "controls") | state.objects(agent, "controls")))
+    apply_transaction(state, onto, [UpdateElement(id=robot, label="r1")], revision=99)
+    goal = parse_goal("at(r1, depot)", scene.view)
+    assert goal.literals[0].subject == robot  # type: ignore[union-attr]
 
 
 def test_goal_structs_are_checked_and_labels_resolved(scene: KittingScene) -> None:

@@ -26,6 +26,7 @@ from task_agent.protocol import Call, Parallel, TaskFile, VerifyProblem
 from task_agent.protocol import Sequence as Seq
 from task_agent.taskfile import load_task_file, read_task_file
 from task_agent.verification import SceneView, check, verify
+from wm_store import NameConflictError
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Query, Relation, UpdateElement, Value
 from wm_store.scene import SceneState, apply_transaction
@@ -134,7 +135,7 @@ def test_the_good_kitting_file_verifies_and_predicts_the_kits_filled(kitting: Wo
         "Station-1",
     )
     assert "holder" in gear.inferred and "object" not in gear.inferred
-    assert gear.locks == ["Arm-1", "Camera-1", "Gripper-1", "MobileManipulator-1"]
+    assert gear.locks == ["Arm-1", "Camera-2", "Gripper-1", "MobileManipulator-1"]
     bolt = steps["root.1.3"]
     assert bolt.agent == "r2" and bolt.params["gripper"] == "Gripper-2"
     assert steps["root.1.4"].params["container"] == "KitBox-2"  # label:KitBox-2 resolved
@@ -187,16 +188,20 @@ EXPECTED: dict[str, list[tuple[str, str]]] = {
         ("root.2", "parameter 'goal' takes a Location; Gear-1 is a Gear (Gear < Part <"),
         ("root.3", "parameter 'speed' takes a float value, got string 'fast'"),
         ("root.4", "parameter 'object' takes an element id or 'label:<label>' (a PhysicalObject)"),
-        ("root.5", "Camera-2 is not a device of agent r1; its Sensor devices: Camera-1"),
+        (
+            "root.5",
+            "r2-camera (Camera-3) is not a device of agent r1; its Sensor devices: "
+            "r1-camera (Camera-2)",
+        ),
         ("root.6", "'container' = '@go.goal': the source is a Location, 'container' takes a"),
     ],
     "resources": [
         (
             "root.2.1 (drive)",
             "may run at the same time as root.2.0 (place) (both lock "
-            "MobileManipulator-1 (r1)): an agent runs one skill per device at a time",
+            "r1 (MobileManipulator-1)): an agent runs one skill per device at a time",
         ),
-        ("root.2.2 (look)", "as root.2.0 (place) (both lock Camera-1 (r1-camera))"),
+        ("root.2.2 (look)", "as root.2.0 (place) (both lock r1-camera (Camera-2))"),
     ],
     "preconditions": [
         (
@@ -271,7 +276,9 @@ def test_an_agent_less_call_must_work_on_every_agent_it_may_get(kitting: World) 
     alone = seq(call("", "pick", object="Bolt-2", gripper="Gripper-2"))
     ((path, kind, message),) = problems(kitting, alone)
     assert (path, kind) == ("root.0", "type")
-    assert message.startswith("pick on r1: parameter 'gripper': Gripper-2 is not a device of")
+    assert message.startswith(
+        "pick on r1: parameter 'gripper': r2-gripper (Gripper-2) is not a device of"
+    )
     # r1 may be busy with the navigation: the locate may get r1 or r2; both can run it
     report = check(
         TaskFile(
@@ -286,16 +293,16 @@ def test_an_agent_less_call_must_work_on_every_agent_it_may_get(kitting: World) 
     task = TaskFile(
         root=par(
             call("r1", "locate", object="Gear-1"),
-            call("", "locate", object="Gear-2", sensor="Camera-1"),
+            call("", "locate", object="Gear-2", sensor="Camera-2"),
         )
     )
     found = problems(kitting, task)
     assert [p[:2] for p in found] == [("root.1", "type"), ("root.1", "resource")]
     assert found[0][2].startswith(
         "no agent named, so the task agent takes the first idle one offering locate (r1, r2); "
-        "on r2: parameter 'sensor': Camera-1 is not a device of agent r2"
+        "on r2: parameter 'sensor': r1-camera (Camera-2) is not a device of agent r2"
     )
-    assert "(both lock Camera-1 (r1-camera))" in found[1][2]
+    assert "(both lock r1-camera (Camera-2))" in found[1][2]
 
 
 # --------------------------------------------------------------------------- dataflow
@@ -356,13 +363,14 @@ def test_a_reference_to_a_broken_step_reports_the_source_only(kitting: World) ->
 
 
 def test_labels_must_name_exactly_one_element(kitting: World) -> None:
-    w = with_ops(kitting, [AddElement(type="Gear", label="Gear-1")])  # a second "Gear-1" label
+    with pytest.raises(NameConflictError, match="label 'Gear-1' of the Gear Gear-4 is the id of"):
+        with_ops(kitting, [AddElement(type="Gear", label="Gear-1")])  # the store refuses it
     task = seq(
-        call("r1", "locate", object="label:Gear-1"), call("r1", "locate", object="label:Gear-3")
+        call("r1", "locate", object="label:Gear-1"), call("r1", "locate", object="label:Gear-9")
     )
-    (problem,) = problems(w, task)
-    assert problem[:2] == ("root.0", "type")
-    assert "the label 'Gear-1' is ambiguous: Gear-1, Gear-4; write an id instead" in problem[2]
+    (problem,) = problems(kitting, task)
+    assert problem[:2] == ("root.1", "type")
+    assert "the label 'Gear-9' names no element; did you mean 'Gear-3' or 'Gear-2' or" in problem[2]
 
 
 def test_partial_definitions_restrict_literals(kitting: World) -> None:
@@ -454,7 +462,7 @@ def test_devices_are_predicted_even_when_the_call_cannot_be_specified(kitting: W
         ("root.1", "resource"),
         ("root.1", "precondition"),
     ]
-    assert "as root.0 (both lock MobileManipulator-1 (r1))" in found[1][2]
+    assert "as root.0 (both lock r1 (MobileManipulator-1))" in found[1][2]
 
 
 def test_an_agent_whose_devices_cannot_be_known_is_locked_whole(kitting: World) -> None:
@@ -619,3 +627,9 @@ def test_any_world_view_works_and_empty_tasks_are_structure_problems(kitting: Wo
         "structure",
         "a call needs a 'skill'",
     )
+
+
+def test_a_label_an_agent_shares_with_its_robot_means_the_robot(kitting: World) -> None:
+    w = with_ops(kitting, [AddElement(type="RobotAgent", label="r1")])  # as registration does
+    task = seq(call("r1", "navigate", goal="label:Station-1", robot="label:r1"))
+    assert problems(w, task) == []

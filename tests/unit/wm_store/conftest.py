@@ -49,7 +49,7 @@ KITTING_OPS = [
     ),
     AddElement(
         type="Gear",
-        label="gear",
+        label="spare gear",
         ref="$gear2",
         properties={"pose": Pose(Position(-0.1, 0.0, 0.05)), "mass": 0.25},
         relations=[Relation("$box", "contain", "$")],

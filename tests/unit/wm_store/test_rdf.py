@@ -216,10 +216,11 @@ def scenes(draw: st.DrawFn, ontology: Ontology) -> list[Op]:
         if draw(st.booleans()) and ids:
             other = draw(st.integers(0, len(ids) - 1))
             relations.append(Relation("$", "near", ids[other]))
+        label = draw(texts)  # labels are unique: numbered apart when given
         ops.append(
             AddElement(
                 type=element_type,
-                label=draw(texts),
+                label=f"e{index} {label}" if label else "",
                 properties=properties,
                 relations=relations,
                 ref=f"e{index}",
@@ -277,15 +278,17 @@ def test_protege_scene_imports_cleanly(ontology: Ontology) -> None:
 
 def test_import_numbers_frames_after_the_target_store(ontology: Ontology) -> None:
     state = load(ontology, (ROOT / "tests/assets/scene_protege.ttl").read_text())
-    again = load(ontology, (ROOT / "tests/assets/scene_protege.ttl").read_text(), state)
+    text = (ROOT / "tests/assets/scene_protege.ttl").read_text()
+    copy = text.replace('rdfs:label "', 'rdfs:label "2nd ').replace("_gripper", "_gripper_2")
+    again = load(ontology, copy, state)  # labels are unique: the second copy's differ
     assert len(again.elements) == 20
     assert {"Worktop-1", "Worktop-2", "MealBox-2"} <= set(again.elements)
 
 
 def test_keep_ids_false_lets_the_store_number(kitting: Kitting, ontology: Ontology) -> None:
     state, _ = kitting
-    text = export_turtle(state, ontology)
-    ops = import_turtle(text, ontology, keep_ids=False)
+    text = export_turtle(state, ontology).replace('rdfs:label "', 'rdfs:label "2nd ')
+    ops = import_turtle(text, ontology, keep_ids=False)  # a second copy, labelled apart
     assert all(op.id == "" for op in ops if isinstance(op, AddElement))  # no poses with frames
     apply_transaction(state, ontology, ops, revision=2, now=1.0)
     assert {"Gear-3", "Gear-4", "KitBox-2"} <= set(state.elements)

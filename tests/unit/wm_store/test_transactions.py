@@ -111,7 +111,7 @@ def test_relation_domain_and_range(kitting: Kitting, ontology: Ontology) -> None
 
 def test_spatial_tree_one_parent_and_no_cycle(kitting: Kitting, ontology: Ontology) -> None:
     state, _ = kitting
-    with pytest.raises(TreeShapeError, match="already has the spatial parent Box-1"):
+    with pytest.raises(TreeShapeError, match=r"already has the spatial parent box-gears \(Box-1\)"):
         commit(
             state, ontology, [SetRelation(subject="KitBox-1", predicate="contain", object="Gear-1")]
         )
