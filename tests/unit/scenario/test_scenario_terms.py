@@ -25,7 +25,8 @@ skm:Bearing a owl:Class ; rdfs:subClassOf skm:Part .
 
 def scenario_with_terms(tmp_path: Path, terms: str | None) -> Path:
     text = KITTING.read_text().replace("../../agents/", f"{KITTING.parents[2]}/agents/")
-    text = text.replace('type = "Gear"', 'type = "Bearing"', 1)
+    text = text.replace('type = "Gear"', 'type = "Bearing"', 1)  # the first gear, Gear-1
+    text = text.replace('"Gear-1"', '"Bearing-1"').replace("Gear-1)", "Bearing-1)")
     text = text.replace("\n[[robots]]", '\nontology = ["parts.ttl"]\n\n[[robots]]', 1)
     if terms is not None:
         (tmp_path / "parts.ttl").write_text(terms)
@@ -43,7 +44,7 @@ def test_the_terms_come_first_and_make_the_scene_valid(tmp_path: Path) -> None:
     state = SceneState()
     result = apply_transaction(state, Ontology.default(), ops, revision=1, now=0.0)
     assert result.ontology.is_a("Bearing", "Part")
-    assert state.ids_with_label("Gear-1")  # the part keeps its label, now a Bearing
+    assert state.ids_with_label("Bearing-1") == {"Bearing-1"}
 
 
 def test_a_missing_or_broken_terms_file_is_named(tmp_path: Path) -> None:

@@ -22,7 +22,8 @@ RUNAWAY = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i }"
 
 
 async def add_gears(store: WmStore, n: int) -> None:
-    ops = [AddElement(type="Gear", label=f"g{i}") for i in range(n)]
+    first = len(store.state.elements)  # labels are unique: number them after what is there
+    ops = [AddElement(type="Gear", label=f"g{first + i}") for i in range(n)]
     await store.transact(Transact(ops=list(ops)))
 
 
