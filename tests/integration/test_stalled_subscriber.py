@@ -55,8 +55,9 @@ pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
 
 STALL = 2.0
 """Seconds the subscriber's callback blocks Zenoh's receive thread."""
-BOUND = 0.5
-"""Seconds a request may take while the subscriber stalls."""
+BOUND = 1.0
+"""Seconds a request may take while the subscriber stalls: half the stall, so a request the
+stall held up fails, while a busy 2-core machine (the whole suite running) does not."""
 GAP = 0.25
 """Seconds the event loop may come back late to the heartbeat."""
 BULK = 64 * 1024
