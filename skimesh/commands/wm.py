@@ -53,6 +53,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="group: group commit (default); fsync: one fsync per transaction; none: no fsync",
     )
     p.add_argument(
+        "--sparql-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="serving: end a SPARQL query (run in a worker process) after S seconds "
+        "(default: %(default)s)",
+    )
+    p.add_argument(
         "--ontology",
         action="append",
         default=[],
@@ -78,7 +86,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def _serve(args: argparse.Namespace) -> int:
     if args.wm_command:  # a sub-command without its own func cannot happen; keep argparse honest
         raise SystemExit(f"unknown wm command {args.wm_command}")
-    config = StoreConfig(data_dir=args.data, durability=args.durability)
+    config = StoreConfig(
+        data_dir=args.data, durability=args.durability, sparql_timeout=args.sparql_timeout
+    )
     terms = read_terms(args.ontology)
     scene = Path(args.scene).read_text() if args.scene else None
     scenario = _read_scenario(args.scenario) if args.scenario else None

@@ -1,10 +1,12 @@
 """SPARQL in a worker process: no query can stall the store.
 
 The store's event loop never parses or evaluates SPARQL. :class:`SparqlWorker` hands each
-query to a child process that holds a copy of the scene (a snapshot at the revision the query
-is for, sent when the revision moved on) and the store's ontology, where a
-:class:`~wm_store.rdf.SparqlEngine` parses, checks and evaluates it. The loop pays only the
-snapshot's encoding on a new revision and the pipe's I/O, which runs in a worker thread.
+query to a child process that keeps a copy of the scene and the store's ontology, where a
+:class:`~wm_store.rdf.SparqlEngine` parses, checks and evaluates it. The copy follows the store
+by the changes since its revision (a snapshot when the child starts, or when the store no
+longer keeps those changes), so the loop pays only the encoding of what changed since the last
+query and the pipe's I/O, which runs in a worker thread. The child runs at a lower CPU
+priority (``nice`` 10), so a query yields the processor to the store's work.
 
 Limits, each refused with :class:`~wm_store.QueryLimitError` (code ``query_limit``):
 
@@ -21,9 +23,11 @@ SIGKILL. A child that dies otherwise is replaced on the next query.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
-from collections.abc import Mapping
+import os
+from collections.abc import Callable, Mapping
 from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
 from typing import Any, Final
@@ -33,12 +37,29 @@ import msgspec
 
 from meshlink.rpc import ErrorReply, encode
 from wm_store._errors import WM_CODES, QueryLimitError, ValidationError, WmError, remote_error
-from wm_store.protocol import SnapshotReply, SparqlReply
+from wm_store.protocol import Change, SnapshotReply, SparqlReply
 
 __all__ = ["SparqlWorker"]
 
 _log = logging.getLogger(__name__)
 _snapshot: Final = msgspec.msgpack.Decoder(SnapshotReply)
+_changes: Final = msgspec.msgpack.Decoder(list[Change])
+
+_NICE: Final = 10
+"""The child's CPU priority: below the store's, yet not starved on a busy host (idle
+scheduling, or ``nice`` 19, would let a saturated machine stall every query until its
+time limit)."""
+
+
+def _lower_priority(pid: int) -> None:
+    """Ad-hoc queries yield the processor to the store's work (``nice`` :data:`_NICE`)."""
+    with contextlib.suppress(OSError):
+        os.setpriority(os.PRIO_PROCESS, pid, _NICE)
+
+
+SyncSource = Callable[[int | None], tuple[str, bytes, int]]
+"""What brings the child's copy of the scene from a revision to the store's (see
+:meth:`SparqlWorker.query`)."""
 _reply: Final = msgspec.msgpack.Decoder(SparqlReply)
 
 
@@ -52,31 +73,28 @@ class SparqlWorker:
         max_text: int = 16 * 1024,
         max_rows: int = 10_000,
         max_waiting: int = 8,
+        core: tuple[str, str] = ("", ""),
     ) -> None:
+        self.core = core
+        """The store's core ontology, (digest, Turtle): the child replays the log on it."""
         self.timeout, self.max_text = timeout, max_text
         self.max_rows, self.max_waiting = max_rows, max_waiting
         self._process: BaseProcess | None = None
         self._conn: Connection | None = None
-        self._synced: tuple[int, int] | None = None
-        """(revision, id of the ontology) of the snapshot the child holds."""
+        self._synced: int | None = None
+        """The revision of the child's copy of the scene (None: it has none)."""
         self._lock = anyio.Lock()
         self._waiting = 0
         self.started = 0
         """How many children were started (statistics; tests see a runaway replaced)."""
 
     async def query(
-        self,
-        snapshot: Any,
-        revision: int,
-        ontology_key: int,
-        core: tuple[str, str],
-        text: str,
-        bindings: Mapping[str, str],
+        self, source: SyncSource, text: str, bindings: Mapping[str, str]
     ) -> SparqlReply:
-        """Answer ``text`` over the scene at ``revision``. ``snapshot()`` gives the scene's
-        :class:`SnapshotReply` (called on the loop only when the child's copy is stale);
-        ``ontology_key`` changes whenever the ontology does; ``core`` is the store's core
-        ontology as (digest, Turtle). Raises QueryLimitError or ValidationError."""
+        """Answer ``text`` over the scene. ``source(revision)`` gives what brings the child's
+        copy from ``revision`` (None: it has none) to the store's: ``("changes", bytes of a
+        list of Change, revision)`` or ``("scene", bytes of a SnapshotReply, revision)``;
+        it is called on the loop. Raises QueryLimitError or ValidationError."""
         size = len(text.encode())
         if size > self.max_text:
             raise QueryLimitError(
@@ -89,25 +107,18 @@ class SparqlWorker:
         self._waiting += 1
         try:
             async with self._lock:
-                return await self._run(snapshot, revision, ontology_key, core, text, bindings)
+                return await self._run(source, text, bindings)
         finally:
             self._waiting -= 1
 
-    async def _run(
-        self,
-        snapshot: Any,
-        revision: int,
-        ontology_key: int,
-        core: tuple[str, str],
-        text: str,
-        bindings: Mapping[str, str],
-    ) -> SparqlReply:
-        conn = await self._child(core)
+    async def _run(self, source: SyncSource, text: str, bindings: Mapping[str, str]) -> SparqlReply:
+        conn = await self._child()
+        kind, data, revision = source(self._synced)
         messages: list[tuple[Any, ...]] = []
-        if self._synced != (revision, ontology_key):
-            messages.append(("scene", encode(snapshot())))
-            self._synced = (revision, ontology_key)
+        if kind == "scene" or data:
+            messages.append((kind, data))
         messages.append(("query", text, dict(bindings), self.max_rows))
+        self._synced = None  # until the child has it all
         try:
             with anyio.fail_after(self.timeout):
                 for message in messages:
@@ -122,6 +133,7 @@ class SparqlWorker:
         except (EOFError, OSError) as exc:
             await self._stop()
             raise QueryLimitError(f"the SPARQL worker ended during the query ({exc})") from None
+        self._synced = revision
         kind, *rest = answer
         if kind == "ok":
             return _reply.decode(rest[0])
@@ -129,16 +141,18 @@ class SparqlWorker:
         reply = ErrorReply(code=code, message=message)
         raise WM_CODES.get(code, remote_error)(reply)
 
-    async def _child(self, core: tuple[str, str]) -> Connection:
+    async def _child(self) -> Connection:
         if self._conn is not None and self._process is not None and self._process.is_alive():
             return self._conn
         await self._stop()
         context = multiprocessing.get_context("spawn")
         parent, child = context.Pipe()
         process = context.Process(
-            target=_serve, args=(child, core), name="skimesh-sparql", daemon=True
+            target=_serve, args=(child, self.core), name="skimesh-sparql", daemon=True
         )
         await anyio.to_thread.run_sync(process.start)
+        if process.pid is not None:  # lower its priority at once: its imports cost CPU too
+            _lower_priority(process.pid)
         child.close()
         self._process, self._conn, self._synced = process, parent, None
         self.started += 1
@@ -161,9 +175,11 @@ class SparqlWorker:
 def _serve(conn: Connection, core: tuple[str, str]) -> None:
     """The child: keep the scene it was sent, answer queries until the pipe closes."""
     from wm_store.ontology import Ontology, replay
+    from wm_store.protocol import ClassDefined, TemplateDefined, TermsDefined
     from wm_store.rdf._sparql import SparqlEngine
     from wm_store.scene import SceneState
 
+    _lower_priority(0)
     digest, text = core
     base = Ontology.default()
     if digest and digest != base.digest:
@@ -181,6 +197,17 @@ def _serve(conn: Connection, core: tuple[str, str]) -> None:
                 ontology = replay(base, snap.ontology)
                 spatial = (n for n, r in ontology.relations.items() if r.spatial)
                 state = SceneState.from_snapshot(snap, spatial)
+                continue
+            if message[0] == "changes":
+                for change in _changes.decode(message[1]):
+                    for delta in change.deltas:
+                        state.apply(delta)
+                        if isinstance(delta, ClassDefined | TemplateDefined | TermsDefined):
+                            ontology = replay(ontology, [delta])
+                            state.set_spatial_predicates(
+                                n for n, r in ontology.relations.items() if r.spatial
+                            )
+                    state.revision = change.revision
                 continue
             _, query, bindings, max_rows = message
             engine.max_rows = max_rows

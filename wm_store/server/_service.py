@@ -19,7 +19,13 @@ import logging
 
 import msgspec
 
-from meshlink.rpc import BAD_REQUEST, DEFAULT_MAX_REQUEST_BYTES, ErrorReply, RequestHandler
+from meshlink.rpc import (
+    BAD_REQUEST,
+    DEFAULT_MAX_REQUEST_BYTES,
+    ErrorReply,
+    RequestHandler,
+    encode,
+)
 from wm_store._errors import ElementNotFoundError, ProtocolError, WmError
 from wm_store.protocol import (
     CardinalityReply,
@@ -74,6 +80,17 @@ class WmService:
             Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
         )
 
+    def _sync(self, revision: int | None) -> tuple[str, bytes, int]:
+        """What brings the SPARQL worker's copy of the scene from ``revision`` to the store's:
+        the changes since (cheap), or the whole scene when it has none or they are gone."""
+        store = self.store
+        if revision is not None and revision >= store.oldest_revision():
+            changes = store.changes_since(revision).changes
+            last = changes[-1].revision if changes else revision
+            return "changes", encode(changes) if changes else b"", last
+        snapshot = store.snapshot()
+        return "scene", encode(snapshot), snapshot.revision
+
     async def aclose(self) -> None:
         """End what the service started (the SPARQL worker process, if any)."""
         await self._sparql.aclose()
@@ -127,14 +144,8 @@ class WmService:
                     revision=state.revision, relations=[] if parent is None else [parent]
                 )
             case Sparql(query=text, bindings=bindings):
-                return await self._sparql.query(
-                    store.snapshot,
-                    state.revision,
-                    id(store.ontology),
-                    store.core_ontology(),
-                    text,
-                    bindings,
-                )
+                self._sparql.core = store.core_ontology()
+                return await self._sparql.query(self._sync, text, bindings)
             case Transact():
                 return await store.transact(request)
             case Snapshot(revision=revision):
