@@ -65,7 +65,7 @@ class UnknownElementError(ModelError):
     """The model has no element of that kind and name; the message suggests close names."""
 
     def __init__(self, kind: str, name: str, known: Iterable[str]) -> None:
-        close = difflib.get_close_matches(name, list(known), n=3, cutoff=0.6)
+        close = difflib.get_close_matches(name, list(dict.fromkeys(known)), n=3, cutoff=0.6)
         hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
         super().__init__(f"no {kind} named {name!r}{hint}")
         self.kind = kind

@@ -226,6 +226,9 @@ class Planned(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     plan_seconds: float = 0.0
     makespan: float = 0.0
     sequential: float = 0.0
+    names: dict[str, str] = {}
+    """How to name the elements the steps' parameters give by id, to a person: the label with
+    the id where the two differ (``wm_store.display_name``), by id."""
 
 
 class StepStarted(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):

@@ -82,8 +82,11 @@ class ProgressPrinter:
             f"(sequential {event.sequential:.1f} s)"
         )
         rows = []
+        named = event.names
         for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
-            args = ", ".join(f"{k}={v}" for k, v in s.params.items())
+            args = ", ".join(
+                f"{k}={named.get(v, v) if isinstance(v, str) else v}" for k, v in s.params.items()
+            )
             after = ",".join(map(str, s.after)) or "-"
             rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {s.skill}({args})  after {after}")
         return [head, *rows]

@@ -37,6 +37,7 @@ import anyio
 import msgspec
 
 from skill_agent import WorldView
+from wm_store import display_name
 
 from .._errors import DomainError, PlanningError, UnsolvableError
 from .._goals import Goal
@@ -267,6 +268,7 @@ class Executor:
         self.events.emit(
             Planned,
             steps=[s.planned() for s in steps],
+            names=self._names(steps),
             attempt=attempt,
             planner=self.planner.engine,
             plan_seconds=seconds,
@@ -284,6 +286,16 @@ class Executor:
             for a in agents
         ]
 
+    def _names(self, steps: list[StepSpec]) -> dict[str, str]:
+        """The display names of the elements the steps' parameters give by id."""
+        names: dict[str, str] = {}
+        for step in steps:
+            for value in step.planned().params.values():
+                element = self.wm.find_element(value) if isinstance(value, str) else None
+                if element is not None:
+                    names[element.id] = display_name(element)
+        return names
+
     def _number(self, steps: list[StepSpec]) -> list[StepSpec]:
         self._next_step += len(steps)
         return steps
@@ -298,6 +310,7 @@ class Executor:
         self.events.emit(
             Planned,
             steps=[s.planned() for s in steps],
+            names=self._names(steps),
             planner="task file",
             makespan=max((s.finish for s in steps), default=0.0),
             sequential=sum(s.finish - s.start for s in steps),

@@ -124,7 +124,7 @@ def test_a_plugin_skills_own_terms_are_planned_and_run(site: Site) -> None:
 
     submit = site.skimesh("task", "submit", "--goal", goal)
     assert submit.returncode == 0, submit.stdout + submit.stderr
-    assert "inspect" in submit.stdout
+    assert f"inspect(part=gear-a ({gear}))" in submit.stdout, "the plan names it label (id)"
 
     properties = anyio.run(_inspected, site, gear)
     assert properties["inspected"] is True and properties["inspectionScore"] == 0.93
