@@ -177,6 +177,7 @@ def add_mesh_arguments(
     default_mode: Mode = "client",
     router: bool = False,
     config_type: Callable[[str], str] = str,
+    repeat: bool = False,
 ) -> None:
     """Add the Zenoh flags every long-running command shares: ``--connect`` and ``--listen``
     (both repeatable), ``--config FILE`` (Zenoh JSON5), then ``--mesh`` and ``--mode``; read
@@ -186,7 +187,14 @@ def add_mesh_arguments(
     there is no ``--mesh`` or ``--mode`` (a router carries every mesh and is a router).
     ``config_type`` converts (and may reject, with ``argparse.ArgumentTypeError``) the
     ``--config`` value, e.g. to point a misplaced file at the right flag.
+
+    ``repeat=True`` adds the same flags to a sub-command of a parser that has them already, so
+    they may come before or after the sub-command (``skimesh wm --connect E tree`` and
+    ``skimesh wm tree --connect E``): the sub-command's copies have no defaults and set only
+    what is given, so they never undo what came before them.
     """
+    suppress: Any = argparse.SUPPRESS
+    sub: dict[str, Any] = {"default": suppress} if repeat else {}
     if router:
         connect_help = "another router to link this one to, repeatable (one router per host)"
         listen_help = (
@@ -202,13 +210,14 @@ def add_mesh_arguments(
             f"{DEFAULT_ROUTER_ENDPOINT}, clients listen on nothing)"
         )
     group = parser.add_argument_group("mesh (Zenoh)")
-    group.add_argument("--connect", action="append", metavar="ENDPOINT", help=connect_help)
-    group.add_argument("--listen", action="append", metavar="ENDPOINT", help=listen_help)
+    group.add_argument("--connect", action="append", metavar="ENDPOINT", help=connect_help, **sub)
+    group.add_argument("--listen", action="append", metavar="ENDPOINT", help=listen_help, **sub)
     group.add_argument(
         "--config",
         dest="zenoh_config",
         type=config_type,
         metavar="FILE",
+        **sub,
         help="Zenoh JSON5 config file (TLS, auth, ACL...), loaded first; the other flags "
         "override it",
     )
@@ -216,12 +225,15 @@ def add_mesh_arguments(
         return
     group.add_argument(
         "--mesh",
-        default="default",
         metavar="NAME",
-        help="mesh name: key prefix skimesh/NAME (default: %(default)s)",
+        help="mesh name: key prefix skimesh/NAME (default: default)",
+        **(sub or {"default": "default"}),
     )
     group.add_argument(
-        "--mode", choices=MODES, default=default_mode, help="Zenoh mode (default: %(default)s)"
+        "--mode",
+        choices=MODES,
+        help=f"Zenoh mode (default: {default_mode})",
+        **(sub or {"default": default_mode}),
     )
 
 

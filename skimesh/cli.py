@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from importlib import metadata
 
 from device_drivers import DeviceError
 from meshlink import MeshlinkError
@@ -32,6 +33,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)"
     )
+    parser.add_argument(
+        "--version", action="version", version=f"skimesh {_version()}", help="print the version"
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     router.add_parser(sub)
     wm.add_parser(sub)
@@ -40,6 +44,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_parser(sub)
     task.add_parser(sub)
     return parser
+
+
+def _version() -> str:
+    try:
+        return metadata.version("skimesh")
+    except metadata.PackageNotFoundError:  # a source tree that was never installed
+        return "unknown (not installed)"
 
 
 #: Errors a user can act on: printed as one line (exit code 2), not as a traceback.

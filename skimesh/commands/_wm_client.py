@@ -17,6 +17,7 @@ from pathlib import Path
 import anyio
 import msgspec
 
+from meshlink import add_mesh_arguments
 from wm_store import WmClient
 from wm_store.protocol import Element, PropertyFilter, Query
 from wm_store.rdf import export_turtle, import_turtle
@@ -37,6 +38,15 @@ def add_client_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     _add_read_commands(cmds)
     _add_write_commands(cmds)
     add_ontology_commands(cmds)
+    for sub in cmds.choices.values():  # the connection options also after the sub-command
+        add_mesh_arguments(sub, repeat=True)
+        sub.add_argument(
+            "--timeout",
+            type=float,
+            default=argparse.SUPPRESS,
+            metavar="S",
+            help="request timeout in seconds (default: 5)",
+        )
 
 
 _JSON_HELP = "machine-readable output: one JSON value on stdout"

@@ -115,3 +115,20 @@ def test_demo_ontology_files_join_the_scenarios(tmp_path: Path) -> None:
     assert setup.scenario.ontology[-1] == str(extra.resolve())
     with pytest.raises(ValueError, match="no file"):
         _setup(parse("demo", "--ontology", str(tmp_path / "missing.ttl")), tmp_path)
+
+
+def test_wm_connection_options_go_before_or_after_the_sub_command() -> None:
+    before = parse("wm", "--connect", ROUTER_A, "--mesh", "m1", "--timeout", "2", "tree")
+    after = parse("wm", "tree", "--connect", ROUTER_A, "--mesh", "m1", "--timeout", "2")
+    for args in (before, after):
+        assert mesh_config_from_args(args) == MeshConfig(connect=(ROUTER_A,), mesh="m1")
+        assert args.timeout == 2.0
+    plain = parse("wm", "teach", "x.ttl")
+    assert plain.mesh == "default" and plain.timeout == 5.0 and plain.connect is None
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as stop:
+        parse("--version")
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.startswith("skimesh ")
