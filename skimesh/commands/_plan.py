@@ -17,16 +17,18 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import anyio
 import msgspec
 
 from task_agent import PlanningError, UnsolvableError, parse_goal
 from task_agent.discovery import agents_from_view
-from task_agent.domain import build_task
-from task_agent.planning import PartialOrderPlan, Planner, to_partial_order
 from wm_store import WmClient, display_name
 from wm_store.protocol import Element
+
+if TYPE_CHECKING:  # the planners take over a second to import: only when planning
+    from task_agent.planning import PartialOrderPlan
 
 from ._connect import wm_session
 
@@ -60,6 +62,9 @@ async def emit_pddl(
     wm: WmClient, goal_text: str, engine: str, directory: Path
 ) -> tuple[Path, Path]:
     """Write the PDDL the task agent would solve for ``goal_text`` now; returns the paths."""
+    from task_agent.domain import build_task
+    from task_agent.planning import Planner
+
     goal = parse_goal(goal_text, wm)
     agents = [a for a in agents_from_view(wm) if a.available]
     task = build_task(agents, wm, goal)
@@ -89,6 +94,8 @@ def named_order(order: PartialOrderPlan, find: Callable[[str], Element | None]) 
 
 async def plan_goal(args: argparse.Namespace) -> int:
     """The body of ``skimesh task plan``."""
+    from task_agent.planning import Planner, to_partial_order
+
     async with wm_session(args, author="planner-cli") as wm:
         if args.emit_pddl:
             for path in await emit_pddl(wm, args.goal, args.engine, args.emit_pddl):

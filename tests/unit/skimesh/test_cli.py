@@ -132,3 +132,20 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
         parse("--version")
     assert stop.value.code == 0
     assert capsys.readouterr().out.startswith("skimesh ")
+
+
+def test_the_command_line_loads_no_planner_simulator_or_viewer() -> None:
+    """``skimesh --help`` and every parser build import neither the planners (over a second),
+    MuJoCo, placo nor rerun: those load when a command needs them (a fresh interpreter)."""
+    import subprocess
+    import sys
+
+    heavy = ("unified_planning", "mujoco", "placo", "rerun")
+    probe = (
+        "import sys; from skimesh.cli import build_parser; build_parser(); "
+        f"print([m for m in {heavy!r} if m in sys.modules])"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert done.stdout.strip() == "[]", done.stdout + done.stderr
