@@ -3,7 +3,8 @@
 The store is the source of truth for the ontology of the whole mesh: every process takes it
 when it connects and follows what is taught later. ``teach`` adds the terms of Turtle files
 (classes, relations, data properties, restrictions, templates, as written in Protégé);
-``define-class``, ``define-relation`` and ``define-property`` teach one term each; ``ontology``
+``define-class``, ``define-template``, ``define-relation`` and ``define-property`` teach one
+term each; ``ontology``
 prints the store's ontology (or only what was taught, with where it came from) as Turtle.
 Everything taught is persisted, replayed after a restart and exported by ``wm export``.
 """
@@ -23,8 +24,10 @@ from wm_store.protocol import (
     ClassDefined,
     GetOntology,
     OntologyReply,
+    TemplateDef,
     TemplateDefined,
     TermsDefined,
+    Value,
 )
 
 from ..runtime import run_service
@@ -68,6 +71,23 @@ def add_ontology_commands(cmds: argparse._SubParsersAction[argparse.ArgumentPars
     cls.add_argument("--parent", required=True, help="an existing class, e.g. Part")
     _annotations(cls)
     cls.set_defaults(func=lambda a: _client(a, _define_class))
+
+    tpl = cmds.add_parser(
+        "define-template",
+        help="teach a default individual (a template) of a class",
+        description="Teach a named template with default property values (SkiROS "
+        "getDefaultElement), e.g. `skimesh wm define-template big-pulley --type Pulley "
+        "--set mass=0.4 --set graspWidth=0.05`. A value is JSON (typed values, lists) or a "
+        "number, true/false, or text. A template taught at run time may be taught again to "
+        "replace it.",
+    )
+    tpl.add_argument("name", help="a name of letters, digits, '_' or '-', e.g. big-pulley")
+    tpl.add_argument("--type", required=True, metavar="CLASS", help="its class, e.g. Pulley")
+    tpl.add_argument(
+        "--set", action="append", default=[], metavar="PROP=VALUE", help="a default value"
+    )
+    tpl.add_argument("--label", default="", help="a readable name")
+    tpl.set_defaults(func=lambda a: _client(a, _define_template))
 
     rel = cmds.add_parser(
         "define-relation",
@@ -176,6 +196,26 @@ def _teach(args: argparse.Namespace) -> int:
 async def _define_class(args: argparse.Namespace, wm: WmClient) -> int:
     revision = await wm.define_class(args.name, args.parent, label=args.label, comment=args.comment)
     print(f"class {args.name} (a {args.parent}) taught at revision {revision}")
+    return 0
+
+
+def _value(raw: str) -> Value:
+    try:
+        return msgspec.json.decode(raw.encode(), type=Value)  # type: ignore[no-any-return]
+    except msgspec.DecodeError:
+        return raw  # plain text
+
+
+async def _define_template(args: argparse.Namespace, wm: WmClient) -> int:
+    properties: dict[str, Value] = {}
+    for item in args.set:
+        name, sep, raw = item.partition("=")
+        if not sep or not name:
+            raise SystemExit(f"--set takes PROP=VALUE, not {item!r}")
+        properties[name] = _value(raw)
+    template = TemplateDef(name=args.name, type=args.type, label=args.label, properties=properties)
+    revision = await wm.define_template(template)
+    print(f"template {args.name} (a {args.type}) taught at revision {revision}")
     return 0
 
 

@@ -217,6 +217,7 @@ def test_the_store_teaches_the_whole_mesh(
             ("define-class", "Pulley", "--parent", "Part", "--comment", "a wheel for a belt"),
             ("define-property", "inspected", "--kind", "bool", "--domain", "Part"),
             ("define-relation", "heldBy", "--domain", "Pulley", "--range", "Bearing"),
+            ("define-template", "big-pulley", "--type", "Pulley", "--set", "mass=0.4"),
         ]
         for step in steps:
             done = skimesh("wm", *common, *step)
@@ -235,6 +236,7 @@ def test_the_store_teaches_the_whole_mesh(
         taught = skimesh("wm", *common, "ontology", "--taught")
         assert "# ---- taught: bearings.ttl" in taught.stdout, taught.stdout
         assert "skm:heldBy" in taught.stdout and "class Pulley" in taught.stdout
+        assert "template big-pulley" in taught.stdout
         whole = skimesh("wm", *common, "ontology")
         assert "skm:Bearing" in whole.stdout and "skm:MobileManipulator" in whole.stdout
         export = tmp_path / "site.ttl"
