@@ -264,6 +264,12 @@ def _skill_classes(module: ModuleType) -> list[type[Skill]]:
     ]
 
 
+_IMPORTS = threading.RLock()
+"""Serialises what the import system does not: loading a skill file under a name of its own,
+and reloading. It guards ``sys.modules``, which is the process's, so it is the process's too
+(agents in one process load plug-ins from their own threads)."""
+
+
 class _Loader:
     """Imports modules once per load; with ``fresh``, re-imports each one once."""
 
@@ -314,15 +320,20 @@ class _Loader:
         return [obj]
 
     def _dotted(self, name: str) -> ModuleType:
-        module = sys.modules.get(name)
-        if module is None:
+        if not self.fresh:  # waits for an import another thread has under way
             return importlib.import_module(name)
-        if not self.fresh:
-            return module
-        _drop_bytecode(module)
-        return importlib.reload(module)
+        with _IMPORTS:
+            module = sys.modules.get(name)
+            if module is None:
+                return importlib.import_module(name)
+            _drop_bytecode(module)
+            return importlib.reload(module)
 
     def _file(self, file: str) -> ModuleType:
+        with _IMPORTS:  # another thread must never see the module half executed
+            return self._load_file(file)
+
+    def _load_file(self, file: str) -> ModuleType:
         path = Path(file)
         if not path.is_file():
             raise SkillLoadError(f"skill file {file!r} does not exist")
