@@ -51,12 +51,12 @@ def test_concurrent_loads_never_see_a_half_imported_plugin(
 
     first = threading.Thread(target=load)
     first.start()
-    entered: threading.Event = gate.entered  # type: ignore[attr-defined]
+    entered: threading.Event = gate.entered
     assert entered.wait(10), "the first loader reached the plug-in's body"
     others = [threading.Thread(target=load) for _ in range(6)]
     for thread in others:
         thread.start()
-    gate.release.set()  # type: ignore[attr-defined]
+    gate.release.set()
     for thread in [first, *others]:
         thread.join(20)
     for module in [n for n in sys.modules if "slow_plugin" in n]:
