@@ -45,9 +45,12 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     """Add ``agent``, ``agents``, ``skills``, ``run``, ``reload`` and ``stop``."""
     p = sub.add_parser(
         "agent",
-        help="run a skill agent for one robot or smart device",
+        help="run the skill agent of a robot or smart device (or several, in one process)",
         description="Serve a skill agent: register it in the world model, answer skill "
-        "requests on agents/NAME/rpc, publish run progress. Stops cleanly on Ctrl-C / SIGTERM.",
+        "requests on agents/NAME/rpc, publish run progress. Several agents (--robot or "
+        "--agent-config repeated; --robot all: every agent the scenario names) share one "
+        "process and one Zenoh session, and load their skills side by side. Stops cleanly on "
+        "Ctrl-C / SIGTERM.",
     )
     add_mesh_arguments(p, config_type=_zenoh_config_file)
     where = p.add_mutually_exclusive_group(required=True)
@@ -57,9 +60,17 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "(a scenario name under configs/scenarios or a scenario file)",
     )
     where.add_argument(
-        "--agent-config", metavar="FILE", help="an agent config file (TOML) instead of --scenario"
+        "--agent-config",
+        action="append",
+        metavar="FILE",
+        help="an agent config file (TOML) instead of --scenario (repeatable)",
     )
-    p.add_argument("--robot", help="the robot or appliance (or agent name) of --scenario")
+    p.add_argument(
+        "--robot",
+        action="append",
+        help="the robot or appliance (or agent name) of --scenario (repeatable; 'all': every "
+        "agent the scenario names)",
+    )
     p.add_argument("--simulate", action="store_true", help="simulated-outcome mode (no hardware)")
     p.add_argument(
         "--devices",
@@ -161,41 +172,79 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
     raise FileNotFoundError(f"scenario {scenario!r} names no agent for {robot!r}; it has: {names}")
 
 
-def _load(args: argparse.Namespace) -> AgentConfig:
+def _load(args: argparse.Namespace) -> list[AgentConfig]:
     if args.agent_config:
-        return load_config(args.agent_config)
-    if not args.robot:
-        raise SkillError("--scenario needs --robot")
-    return load_config(scenario_config_path(args.scenario, args.robot))
+        configs = [load_config(path) for path in args.agent_config]
+    else:
+        if not args.robot:
+            raise SkillError("--scenario needs --robot (repeatable; 'all': every agent)")
+        robots = list(args.robot)
+        if robots == ["all"]:
+            robots = sorted(_scenario_agents(args.scenario))
+        configs = [load_config(scenario_config_path(args.scenario, r)) for r in robots]
+    names = [c.name for c in configs]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise SkillError(f"agent {', '.join(twice)} given twice: one process serves each once")
+    return configs
+
+
+def _scenario_agents(scenario: str) -> dict[str, str]:
+    from scenario import ScenarioError, load_scenario
+
+    from .sim import scenario_file
+
+    try:
+        return load_scenario(scenario_file(scenario)).agents
+    except ScenarioError as e:
+        raise FileNotFoundError(str(e)) from None
 
 
 def _serve(args: argparse.Namespace) -> int:
     try:
-        config = _load(args)
+        configs = _load(args)
     except (SkillError, FileNotFoundError) as e:
         print(f"skimesh agent: {e}", file=sys.stderr)
         return EXIT_REFUSED
 
     remote = (args.devices or ("none" if args.simulate else "zenoh")) == "zenoh"
 
+    async def serve(mesh: Mesh, config: AgentConfig) -> None:
+        try:
+            drivers = await _remote_drivers(mesh, config, args.device_timeout) if remote else None
+            await run_agent(
+                mesh, config, simulate=args.simulate, drivers=drivers, wm_timeout=args.timeout
+            )
+        except (SkillError, WmError, MeshlinkError) as e:
+            raise _AgentFailed(config.name, e) from e
+
     async def main() -> int:
         try:
-            async with mesh_session(args) as mesh:
-                drivers = (
-                    await _remote_drivers(mesh, config, args.device_timeout) if remote else None
-                )
-                await run_agent(
-                    mesh, config, simulate=args.simulate, drivers=drivers, wm_timeout=args.timeout
-                )
-        except SkillError as e:
-            print(f"skimesh agent {config.name}: {e}", file=sys.stderr)
-            return EXIT_REFUSED
-        except (WmError, MeshlinkError) as e:
-            print(f"skimesh agent {config.name}: {e}", file=sys.stderr)
+            async with mesh_session(args) as mesh, anyio.create_task_group() as tg:
+                for config in configs:
+                    tg.start_soon(serve, mesh, config)
+        except (WmError, MeshlinkError) as e:  # the session itself
+            print(f"skimesh agent: {e}", file=sys.stderr)
             return EXIT_UNREACHABLE
+        except BaseExceptionGroup as group:
+            failed = [e for e in group.exceptions if isinstance(e, _AgentFailed)]
+            if len(failed) != len(group.exceptions):
+                raise
+            for failure in failed:
+                print(f"skimesh agent {failure.agent}: {failure.cause}", file=sys.stderr)
+            refused = any(isinstance(f.cause, SkillError) for f in failed)
+            return EXIT_REFUSED if refused else EXIT_UNREACHABLE
         return 0
 
     return run_service(main)
+
+
+class _AgentFailed(Exception):
+    """One agent of the process stopped with an error the user can act on."""
+
+    def __init__(self, agent: str, cause: Exception) -> None:
+        super().__init__(f"{agent}: {cause}")
+        self.agent, self.cause = agent, cause
 
 
 async def _remote_drivers(mesh: Mesh, config: AgentConfig, timeout: float) -> dict[str, object]:
