@@ -58,7 +58,7 @@ def test_the_router_links_to_other_routers_and_has_no_mesh_or_mode(
 
 def test_the_agent_takes_its_own_toml_as_agent_config() -> None:
     args = parse("agent", "--agent-config", "r1.toml", "--config", "client.json5")
-    assert (args.agent_config, args.zenoh_config) == ("r1.toml", "client.json5")
+    assert (args.agent_config, args.zenoh_config) == (["r1.toml"], "client.json5")
     assert args.scenario is None
 
 
