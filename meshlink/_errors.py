@@ -82,14 +82,22 @@ class NoReplyError(MeshlinkError):
     (denied queries are dropped silently).
     """
 
-    def __init__(self, key_expr: str, timeout: float) -> None:
+    def __init__(self, key_expr: str, timeout: float, *, waited: float | None = None) -> None:
+        if waited is None or waited >= timeout * 0.9:
+            when = f"within {timeout:g} s"
+        else:  # Zenoh ends a query at once when no server is routed for it
+            when = f"(the query ended after {waited:.1f} s: no server answers this key)"
         super().__init__(
-            f"no reply from {key_expr!r} within {timeout:g} s: is the server for this key "
-            "running and on the same mesh? A router ACL that denies the query also looks like "
-            "this (Zenoh drops denied queries silently)."
+            f"no reply from {key_expr!r} {when}: is the server for this key running and on "
+            "the same mesh? A router ACL that denies the query also looks like this (Zenoh "
+            "drops denied queries silently)."
         )
         self.key_expr = key_expr
         self.timeout = timeout
+        self.waited = timeout if waited is None else waited
+        self.when = when
+        """The time really waited, for messages: ``within 5 s``, or ``(the query ended after
+        0.3 s: ...)`` when Zenoh gave up before the limit."""
 
 
 class RemoteError(MeshlinkError):

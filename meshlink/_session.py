@@ -10,6 +10,7 @@ thread <-> loop crossings live in ``meshlink._bridge``.
 
 from __future__ import annotations
 
+import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -134,9 +135,10 @@ class Mesh:
             NoReplyError: no reply within ``timeout`` seconds (no server, or an ACL denied it).
             InvalidKeyError, SessionError: as for :meth:`get`.
         """
+        started = time.monotonic()
         replies = await self._query(key_expr, payload, timeout, first_only=True)
         if not replies:
-            raise NoReplyError(key_expr, timeout)
+            raise NoReplyError(key_expr, timeout, waited=time.monotonic() - started)
         reply = self._reply(replies[0], key_expr)
         if not reply.ok:
             raise RemoteError(reply.payload, key_expr)

@@ -117,9 +117,9 @@ class TaskClient:
             data = await self.mesh.request(key, encode(request), timeout=wait)
         except RemoteError as e:
             raise _remote_error(e.payload) from None
-        except NoReplyError:
+        except NoReplyError as e:
             raise TaskTransportError(
-                f"the task agent did not answer on {key} within {wait:g} s: is `skimesh "
+                f"the task agent did not answer on {key} {e.when}: is `skimesh "
                 f"task-agent` running on mesh {self.mesh.keys.mesh!r}?"
             ) from None
         except MeshlinkError as e:

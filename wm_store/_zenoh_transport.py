@@ -38,7 +38,7 @@ class ZenohTransport:
             data = exc.payload
         except NoReplyError as exc:
             raise TransportError(
-                f"the world-model store did not answer on {key} within {timeout} s: is "
+                f"the world-model store did not answer on {key} {exc.when}: is "
                 "`skimesh wm` running on this mesh, and does the ACL allow this client?"
             ) from exc
         except MeshlinkError as exc:

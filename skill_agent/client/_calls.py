@@ -124,9 +124,9 @@ class AgentClient:
             data = await self.mesh.request(key, encode(request), timeout=timeout)
         except RemoteError as e:
             raise error_for_reply(e.payload) from None
-        except NoReplyError:
+        except NoReplyError as e:
             raise AgentTransportError(
-                f"agent {self.agent!r} did not answer on {key} within {timeout:g} s: is it "
+                f"agent {self.agent!r} did not answer on {key} {e.when}: is it "
                 f"running on mesh {self.mesh.keys.mesh!r} (`skimesh agents` lists live agents), "
                 "and does the router's ACL let this user query it? (denials are silent)"
             ) from None

@@ -42,3 +42,11 @@ def test_error_messages_say_what_to_do() -> None:
     router = SessionError.cannot_open("router", [], ["tcp/127.0.0.1:2"], "in use")
     assert "tcp/127.0.0.1:2" in str(router)
     assert "--listen" in str(router)
+
+
+def test_no_reply_says_the_time_really_waited() -> None:
+    early = NoReplyError("skimesh/x/agents/r9/rpc", 600.0, waited=0.4)
+    assert "after 0.4 s" in str(early) and "600" not in str(early)
+    assert early.waited == 0.4 and early.when in str(early)
+    full = NoReplyError("skimesh/x/agents/r9/rpc", 5.0, waited=5.01)
+    assert "within 5 s" in str(full)
