@@ -348,6 +348,9 @@ def _import(args: argparse.Namespace) -> int:
         ops = await anyio.to_thread.run_sync(
             functools.partial(import_turtle, text, wm.ontology, state=state)
         )
+        if not ops:
+            print(f"{args.file}: no individuals or terms to import", file=sys.stderr)
+            return 1
         reply = await wm.transact(ops)
         ids = {ref: i for ref, i in reply.ids.items() if not ref.startswith("#")}
         if args.json:

@@ -28,7 +28,7 @@ from anyio.abc import TaskStatus
 from msgspec import Meta
 
 from meshlink.rpc import encode
-from wm_store._errors import ConflictError, HistoryCompactedError, StorageError
+from wm_store._errors import ConflictError, HistoryCompactedError, StorageError, ValidationError
 from wm_store.durability import Durability
 from wm_store.ontology import Ontology, parse_terms, replay
 from wm_store.protocol import (
@@ -183,6 +183,8 @@ class WmStore:
         """
         if self._failed is not None:
             raise StorageError(f"the store stopped accepting writes: {self._failed}")
+        if not request.ops:
+            raise ValidationError("an empty transaction: give at least one op")
         if len(request.ops) > self.config.max_ops:
             raise ConflictError(f"{len(request.ops)} ops exceed the limit of {self.config.max_ops}")
         if request.txn_id and request.txn_id in self._txn_revisions:

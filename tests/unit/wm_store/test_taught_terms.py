@@ -12,7 +12,13 @@ from pathlib import Path
 import pytest
 
 from tests.unit.wm_store.stores import running
-from wm_store import InMemoryTransport, OntologyError, UnknownPropertyError, WmClient
+from wm_store import (
+    InMemoryTransport,
+    OntologyError,
+    UnknownPropertyError,
+    ValidationError,
+    WmClient,
+)
 from wm_store.ontology import Ontology, core_ontology_path, property_turtle, relation_turtle
 from wm_store.protocol import (
     DefineTerms,
@@ -22,7 +28,9 @@ from wm_store.protocol import (
     OntologyReply,
     Snapshot,
     SnapshotReply,
+    TermsDef,
     TermsDefined,
+    Transact,
     Value,
 )
 from wm_store.rdf import export_turtle, import_turtle
@@ -161,3 +169,14 @@ def test_export_carries_the_taught_terms_and_import_teaches_them_back() -> None:
     again = Ontology.default().teach(first.terms.turtle)
     assert again.same_terms(onto)
     assert [type(o).__name__ for o in rest] == ["AddElement"]
+
+
+async def test_an_empty_transaction_is_refused_and_a_no_op_commits_nothing() -> None:
+    store = WmStore(Ontology.default())
+    async with running(store) as s:
+        with pytest.raises(ValidationError, match="empty transaction"):
+            await s.transact(Transact(ops=[]))
+        await s.teach(BEARING, "bearing.ttl")
+        revision = s.revision
+        again = await s.transact(Transact(ops=[DefineTerms(terms=TermsDef(turtle=BEARING))]))
+        assert again.revision == revision == s.revision, "known terms: no new revision"
