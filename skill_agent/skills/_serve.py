@@ -27,16 +27,15 @@ from wm_store.ontology import Cls
 __all__ = ["PlaceAt", "PutIn", "Serve"]
 
 
-class Serve(Place):
-    """Put the held object on a tray at the robot's location (FRIEND II: serve the meal)."""
-
-    description = SkillDescription(
-        name="serve",
+def _put_down(name: str, doc: str, target: str, cls: str, what: str) -> SkillDescription:
+    """A place into ``target`` (of class ``cls``) standing at the robot's location."""
+    return SkillDescription(
+        name=name,
         skill_type="place",
-        doc="Put the held object down on a tray within reach (serve it).",
+        doc=doc,
         parameters=[
             OBJECT,
-            ParamSpec(name="tray", type=Cls.Tray, doc="the tray"),
+            ParamSpec(name=target, type=cls, doc=what),
             LOCATION,
             *DEVICES,
             *TUNING,
@@ -44,13 +43,22 @@ class Serve(Place):
         pre=[
             contains("gripper", "object"),
             at("robot", "location"),
-            at("tray", "location"),
-            not_full("tray"),
+            at(target, "location"),
+            not_full(target),
         ],
         hold=[contains("gripper", "object")],
-        post=[contains("tray", "object"), contains("gripper", "object", holds=False)],
+        post=[contains(target, "object"), contains("gripper", "object", holds=False)],
         duration=4.0,
     )
+
+
+class Serve(Place):
+    """Put the held object on a tray at the robot's location (FRIEND II: serve the meal)."""
+
+    description = _put_down(
+        "serve", "Put the held object down on a tray within reach (serve it).",
+        "tray", Cls.Tray, "the tray",
+    )  # fmt: skip
     target_param = "tray"
 
 
@@ -58,28 +66,12 @@ class PlaceAt(Place):
     """Put the held object into a container at the robot's location, not carried by it (a box
     on the table beside a fixed arm)."""
 
-    description = SkillDescription(
-        name="place_at",
-        skill_type="place",
-        doc="Put the held object down into a container within reach at the robot's location "
+    description = _put_down(
+        "place_at",
+        "Put the held object down into a container within reach at the robot's location "
         "(a box on a table beside the arm).",
-        parameters=[
-            OBJECT,
-            ParamSpec(name="container", type=Cls.Container, doc="where it goes"),
-            LOCATION,
-            *DEVICES,
-            *TUNING,
-        ],
-        pre=[
-            contains("gripper", "object"),
-            at("robot", "location"),
-            at("container", "location"),
-            not_full("container"),
-        ],
-        hold=[contains("gripper", "object")],
-        post=[contains("container", "object"), contains("gripper", "object", holds=False)],
-        duration=4.0,
-    )
+        "container", Cls.Container, "where it goes",
+    )  # fmt: skip
     success_probability = 0.95
     target_param = "container"
 

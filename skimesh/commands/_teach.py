@@ -19,7 +19,7 @@ import anyio
 import msgspec
 
 from wm_store import WmClient
-from wm_store.ontology import Ontology, property_turtle, relation_turtle, replay
+from wm_store.ontology import Ontology, replay
 from wm_store.protocol import (
     ClassDefined,
     GetOntology,
@@ -220,29 +220,18 @@ async def _define_template(args: argparse.Namespace, wm: WmClient) -> int:
 
 
 async def _define_relation(args: argparse.Namespace, wm: WmClient) -> int:
-    text = relation_turtle(
-        args.name,
-        domain=args.domain,
-        range=args.range,
-        parent=args.parent,
-        label=args.label,
-        comment=args.comment,
-    )
-    revision = await wm.teach(text, source=f"relation {args.name}")
+    revision = await wm.define_relation(
+        args.name, domain=args.domain, range=args.range, parent=args.parent,
+        label=args.label, comment=args.comment,
+    )  # fmt: skip
     print(f"relation {args.name} taught at revision {revision}")
     return 0
 
 
 async def _define_property(args: argparse.Namespace, wm: WmClient) -> int:
-    text = property_turtle(
-        args.name,
-        kind=args.kind,
-        domain=args.domain,
-        minimum=args.min,
-        maximum=args.max,
-        label=args.label,
-        comment=args.comment,
-    )
-    revision = await wm.teach(text, source=f"property {args.name}")
+    revision = await wm.define_property(
+        args.name, kind=args.kind, domain=args.domain, minimum=args.min, maximum=args.max,
+        label=args.label, comment=args.comment,
+    )  # fmt: skip
     print(f"data property {args.name} ({args.kind}) taught at revision {revision}")
     return 0

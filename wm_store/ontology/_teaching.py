@@ -178,6 +178,15 @@ def _text(value: str) -> str:
     return '"' + value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"@en'
 
 
+def _statement(lines: list[str], label: str, comment: str) -> str:
+    """One subject's Turtle: ``lines`` (predicate-object pairs) plus label and comment."""
+    if label:
+        lines.append(f"rdfs:label {_text(label)}")
+    if comment:
+        lines.append(f"rdfs:comment {_text(comment)}")
+    return _PREFIXES + " ;\n    ".join(lines) + " .\n"
+
+
 def relation_turtle(
     name: str,
     *,
@@ -198,11 +207,7 @@ def relation_turtle(
         lines.append(f"rdfs:domain {_class_list(domain)}")
     if range:
         lines.append(f"rdfs:range {_class_list(range)}")
-    if label:
-        lines.append(f"rdfs:label {_text(label)}")
-    if comment:
-        lines.append(f"rdfs:comment {_text(comment)}")
-    return _PREFIXES + " ;\n    ".join(lines) + " .\n"
+    return _statement(lines, label, comment)
 
 
 def property_turtle(
@@ -245,8 +250,4 @@ def property_turtle(
     else:
         lines.append(f"rdfs:range {xsd}")
     lines.append(f'skm:valueKind "{kind}"')
-    if label:
-        lines.append(f"rdfs:label {_text(label)}")
-    if comment:
-        lines.append(f"rdfs:comment {_text(comment)}")
-    return _PREFIXES + " ;\n    ".join(lines) + " .\n"
+    return _statement(lines, label, comment)
