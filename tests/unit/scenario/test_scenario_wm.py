@@ -8,7 +8,6 @@ import math
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import msgspec
 import mujoco
 import numpy as np
@@ -18,10 +17,10 @@ from mujoco_sim.models import build_scene
 from scenario import Scenario, load_scenario, resolve_placements
 from scenario.wm import HOME_6, HOME_7, scenario_ops
 from skill_agent.primitives.poses import to_transform
-from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, WmClient
-from wm_store.ontology import Cls, Ontology, Prop, Rel
+from tests.unit.wm_store.stores import memory_client
+from wm_store import DeviceSpec, RobotRegistration, WmClient
+from wm_store.ontology import Cls, Prop, Rel
 from wm_store.protocol import AddElement, Pose, SizeCuboid, SizeCylinder
-from wm_store.server import WmService, WmStore
 
 pytestmark = pytest.mark.anyio
 
@@ -30,13 +29,8 @@ SCENARIOS = Path(__file__).resolve().parents[3] / "configs" / "scenarios"
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 async def load(wm: WmClient, name: str) -> dict[str, str]:

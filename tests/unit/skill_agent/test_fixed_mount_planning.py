@@ -8,17 +8,16 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import pytest
 
 from scenario import load_scenario
 from scenario.wm import scenario_ops
 from skill_agent.runtime import SkillRegistry, load_config
 from tests.unit.skill_agent.scenario_planning import plan_scenario
-from wm_store import InMemoryTransport, WmClient
+from tests.unit.wm_store.stores import memory_client
+from wm_store import WmClient
 from wm_store.ontology import Cls, Ontology
 from wm_store.protocol import AddElement
-from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 SCENARIO = ROOT / "configs" / "scenarios" / "kitting-cell" / "scenario.toml"
@@ -26,13 +25,8 @@ SCENARIO = ROOT / "configs" / "scenarios" / "kitting-cell" / "scenario.toml"
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 def test_the_scene_of_a_fixed_robot_has_no_base() -> None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import pytest
 
 from scenario import load_scenario
@@ -26,9 +25,8 @@ from task_agent.protocol import Call, TaskFile
 from task_agent.protocol import Parallel as Par
 from task_agent.protocol import Sequence as Seq
 from task_agent.verification import check
-from wm_store import InMemoryTransport, WmClient
-from wm_store.ontology import Ontology
-from wm_store.server import WmService, WmStore
+from tests.unit.wm_store.stores import memory_client
+from wm_store import WmClient
 
 pytestmark = pytest.mark.anyio
 
@@ -37,13 +35,8 @@ ROOT = Path(__file__).resolve().parents[3]
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 async def test_the_planned_sensor_is_the_locked_sensor(wm: WmClient) -> None:

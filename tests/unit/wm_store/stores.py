@@ -7,9 +7,11 @@ from contextlib import asynccontextmanager
 
 import anyio
 
-from wm_store.server import WmStore
+from wm_store import InMemoryTransport, WmClient
+from wm_store.ontology import Ontology
+from wm_store.server import WmService, WmStore
 
-__all__ = ["running"]
+__all__ = ["memory_client", "running"]
 
 
 @asynccontextmanager
@@ -20,3 +22,11 @@ async def running(store: WmStore) -> AsyncIterator[WmStore]:
         yield store
         tg.cancel_scope.cancel()
     await store.aclose()
+
+
+@asynccontextmanager
+async def memory_client() -> AsyncIterator[WmClient]:
+    """A client of a fresh in-memory store (core ontology) over the in-memory transport."""
+    store = await WmStore.open(Ontology.default())
+    async with running(store), WmClient.connect(InMemoryTransport(WmService(store))) as client:
+        yield client
