@@ -9,19 +9,15 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import msgspec
 import pytest
 
 from device_drivers import GripperState
-from mujoco_sim import WorldOptions, running_world, sim_devices
+from mujoco_sim import sim_devices
 from scenario import RobotSpec, Scenario, load_scenario
-from scenario.wm import scenario_ops
 from skill_agent.skills import Locate, Pick, PlaceAt
-from tests.integration.test_skills_sim import Sim, run
-from wm_store import InMemoryTransport, WmClient
-from wm_store.ontology import Ontology, Rel
-from wm_store.server import WmService, WmStore
+from tests.integration.test_skills_sim import Sim, run, simulation
+from wm_store.ontology import Rel
 
 pytest.importorskip("cmeel", reason="needs example-robot-data: pip install example-robot-data")
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
@@ -41,19 +37,9 @@ def generated_cell() -> Scenario:
 
 @pytest.fixture(params=["panda", "generated"])
 async def sim(request: pytest.FixtureRequest) -> AsyncIterator[Sim]:
-    scenario = load_scenario(SCENARIO) if request.param == "panda" else generated_cell()
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with (
-            running_world(scenario, WorldOptions(fast=True)) as world,
-            WmClient.connect(InMemoryTransport(WmService(store)), ontology) as wm,
-        ):
-            reply = await wm.transact(scenario_ops(scenario))
-            ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
-            yield Sim(world, wm, ids)
-        tg.cancel_scope.cancel()
+    edit = None if request.param == "panda" else (lambda _: generated_cell())
+    async with simulation("kitting-cell", edit=edit) as sim:
+        yield sim
 
 
 async def test_a_fixed_robot_has_no_base(sim: Sim) -> None:

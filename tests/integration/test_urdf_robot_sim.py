@@ -10,20 +10,16 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import msgspec
 import numpy as np
 import pytest
 
 from device_drivers import Arm, Gripper, GripperState
-from mujoco_sim import WorldOptions, running_world, sim_devices
-from scenario import UR5E_JOINTS, load_scenario
-from scenario.wm import scenario_ops
+from mujoco_sim import sim_devices
+from scenario import UR5E_JOINTS
 from skill_agent.primitives import close_gripper, move_cartesian, open_gripper
-from tests.integration.test_skills_sim import KITTING, Sim, run
-from wm_store import InMemoryTransport, WmClient
-from wm_store.ontology import Ontology, Rel
-from wm_store.server import WmService, WmStore
+from tests.integration.test_skills_sim import KITTING, Sim, run, simulation
+from wm_store.ontology import Rel
 
 pytest.importorskip("cmeel", reason="needs example-robot-data: pip install example-robot-data")
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
@@ -33,19 +29,8 @@ SCENARIO = Path(__file__).resolve().parents[2] / "configs/scenarios/kitting-pand
 
 @pytest.fixture
 async def sim() -> AsyncIterator[Sim]:
-    scenario = load_scenario(SCENARIO)
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with (
-            running_world(scenario, WorldOptions(fast=True)) as world,
-            WmClient.connect(InMemoryTransport(WmService(store)), ontology) as wm,
-        ):
-            reply = await wm.transact(scenario_ops(scenario))
-            ids = {ref[1:]: eid for ref, eid in reply.ids.items() if ref.startswith("$")}
-            yield Sim(world, wm, ids)
-        tg.cancel_scope.cancel()
+    async with simulation("kitting-panda") as sim:
+        yield sim
 
 
 async def _pick_and_place(sim: Sim, robot: str, station: str, part: str, kit: str) -> None:
