@@ -47,6 +47,9 @@ class ProgressPrinter:
         self.begun: dict[int, float] = {}
         self.busy: dict[str, float] = {}
         self.count: dict[str, int] = {}
+        self.said: dict[int, str] = {}
+        """The last progress text of each step: a line is printed when it changes, not at
+        every update of the step's fraction."""
 
     def __call__(self, event: TaskEvent) -> None:
         for line in self.lines(event):
@@ -65,6 +68,9 @@ class ProgressPrinter:
                 return [step_line(at, event.agent, event.step, event.skill, "started")]
             case StepProgress():
                 text = f"[{event.state}] {event.message}".rstrip()
+                if self.said.get(event.step) == text:
+                    return []
+                self.said[event.step] = text
                 skill = self.skills.get(event.step, "")
                 return [step_line(at, event.agent, event.step, skill, text)]
             case StepFinished():
