@@ -30,6 +30,7 @@ The core uses only :mod:`meshlink.rpc`, which opens no session: the error reply 
 speaks, request decoding and handling, and raising an error reply by its code.
 """
 
+from ._batches import transact_in_batches as transact_in_batches
 from ._client import WmClient as WmClient
 from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
@@ -103,5 +104,6 @@ __all__ = [
     "ZenohTransport",
     "display_name",
     "registration_ops",
+    "transact_in_batches",
     "unregistration_ops",
 ]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
 import sys
 from collections.abc import Awaitable, Callable
 from pathlib import Path
@@ -18,7 +19,7 @@ import anyio
 import msgspec
 
 from meshlink import add_mesh_arguments
-from wm_store import WmClient
+from wm_store import WmClient, transact_in_batches
 from wm_store.protocol import Element, PropertyFilter, Query
 from wm_store.rdf import export_turtle, import_turtle
 from wm_store.scene import SceneState, id_sort_key
@@ -180,12 +181,23 @@ def _add_write_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     imp = _command(
         cmds,
         "import",
-        "add the individuals of a Turtle scene file",
-        "One transaction: all or nothing. Individuals named <Class>-<n> keep that id (it must "
-        "be new to the store); others get fresh ids, printed with --json.",
+        "add the ontology terms and individuals of a Turtle file",
+        "The terms the file declares are taught first, then its individuals are added, in "
+        "transactions of --batch ops (a file of any size imports; progress on stderr). Each "
+        "batch commits on its own: if one is refused, the ones before it stay, and running the "
+        "same import again goes on from there (batches are sent under ids made from the file's "
+        "digest). Individuals named <Class>-<n> keep that id (it must be new to the store); "
+        "others get fresh ids, printed with --json.",
         json_help="print {revision, elements, ids}: ids maps each individual's name to its id",
     )
     imp.add_argument("file", metavar="FILE", help="a Turtle file, e.g. configs/scenes/sample.ttl")
+    imp.add_argument(
+        "--batch",
+        type=int,
+        default=5000,
+        metavar="N",
+        help="ops per transaction (default: %(default)s; the store takes up to 10,000)",
+    )
     imp.set_defaults(func=_import)
 
     scen = _command(
@@ -351,11 +363,19 @@ def _import(args: argparse.Namespace) -> int:
         if not ops:
             print(f"{args.file}: no individuals or terms to import", file=sys.stderr)
             return 1
-        reply = await wm.transact(ops)
-        ids = {ref: i for ref, i in reply.ids.items() if not ref.startswith("#")}
+        batches = -(-len(ops) // max(1, args.batch))
+
+        def progress(done: int, total: int, revision: int) -> None:
+            if batches > 1:
+                print(f"  {done}/{total} ops at revision {revision}", file=sys.stderr)
+
+        digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+        ids = await transact_in_batches(
+            wm, ops, size=max(1, args.batch), txn_prefix=f"import-{digest}", progress=progress
+        )
         if args.json:
-            return await _write_json({"revision": reply.revision, "elements": len(ids), "ids": ids})
-        print(f"imported {len(ids)} elements at revision {reply.revision}")
+            return await _write_json({"revision": wm.revision, "elements": len(ids), "ids": ids})
+        print(f"imported {len(ids)} elements at revision {wm.revision}")
         return 0
 
     return _client(args, body)

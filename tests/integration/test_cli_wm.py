@@ -255,3 +255,27 @@ def test_the_store_teaches_the_whole_mesh(
         assert skimesh("wm", *other, "ls", "Bearing").returncode == 0
     finally:
         assert fresh.stop() == 0, fresh.log()
+
+
+def test_an_import_over_one_transactions_limit_goes_in_batches(
+    router_endpoint: str, mesh_name: str, tmp_path: Path
+) -> None:
+    """10,010 individuals: more than a transaction takes (10,000 ops)."""
+    body = "".join(f'skms:p{i} a skm:Gear ; rdfs:label "part {i}" .\n' for i in range(10_010))
+    big = tmp_path / "big.ttl"
+    big.write_text(
+        "@prefix skm: <https://skimesh.dev/ontology#> .\n"
+        "@prefix skms: <https://skimesh.dev/scene#> .\n"
+        "@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .\n" + body
+    )
+    store = start_store(router_endpoint, mesh_name, tmp_path / "wm")
+    common = ["--connect", router_endpoint, "--mesh", mesh_name]
+    try:
+        done = skimesh("wm", *common, "import", str(big), "--timeout", "30")
+        assert done.returncode == 0, done.stderr
+        assert "imported 10010 elements" in done.stdout
+        assert "5000/10010 ops" in done.stderr and "10010/10010 ops" in done.stderr
+        info = json.loads(skimesh("wm", *common, "info").stdout)
+        assert info["elements"] == 10_010
+    finally:
+        assert store.stop() == 0, store.log()
