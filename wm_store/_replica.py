@@ -23,7 +23,7 @@ import msgspec
 from anyio.abc import TaskStatus
 from anyio.streams.memory import MemoryObjectSendStream
 
-from wm_store._errors import HistoryCompactedError, RevisionTimeoutError
+from wm_store._errors import HistoryCompactedError, RevisionTimeoutError, WmError
 from wm_store._transport import WmTransport, raise_for_error
 from wm_store.ontology import Ontology, replay
 from wm_store.protocol import (
@@ -32,6 +32,8 @@ from wm_store.protocol import (
     ChangesSince,
     ClassDefined,
     GetOntology,
+    Info,
+    InfoReply,
     OntologyReply,
     Snapshot,
     SnapshotReply,
@@ -43,6 +45,9 @@ from wm_store.scene import SceneState
 __all__ = ["Replica", "ReplicaStats"]
 
 _log = logging.getLogger(__name__)
+
+_RECENT = 1024
+"""How many digests of applied changes a replica keeps to compare with the store's."""
 
 
 class ReplicaStats(msgspec.Struct, frozen=True):
@@ -62,8 +67,12 @@ class Replica:
         *,
         timeout: float = 5.0,
         catch_up_after: float = 0.5,
+        check_every: float = 5.0,
     ) -> None:
         self.transport = transport
+        self.check_every = check_every
+        """Seconds between two checks of this replica against the store (revision and digest;
+        0: never)."""
         self._own_base = base_ontology is not None
         self.base_ontology = base_ontology or Ontology.default()
         """The core the store's ontology log is replayed on: the store's own core (this
@@ -83,6 +92,11 @@ class Replica:
         self._applied = 0
         self._gaps = 0
         self._snapshots = 0
+        self._recent: dict[int, str] = {}
+        """The digests of the changes applied lately, by revision (the last :data:`_RECENT`)."""
+        self.divergences = 0
+        """How many times the replica found it had applied what the store never committed."""
+        self._reloaded = anyio.Event()
 
     @property
     def revision(self) -> int:
@@ -98,13 +112,59 @@ class Replica:
         async with self.transport.changes() as stream:
             async with self._lock:
                 await self._load_snapshot()
-            task_status.started()
-            async for change in stream:
-                async with self._lock:
-                    await self._accept(change)
+            try:
+                async with anyio.create_task_group() as tg:
+                    task_status.started()
+                    if self.check_every > 0:
+                        tg.start_soon(self._check_against_store)
+                    async for change in stream:
+                        async with self._lock:
+                            await self._accept(change)
+                    tg.cancel_scope.cancel()
+            except BaseExceptionGroup as group:  # the stream's error, as itself
+                if len(group.exceptions) == 1 and isinstance(group.exceptions[0], Exception):
+                    raise group.exceptions[0] from None
+                raise
+
+    async def _check_against_store(self) -> None:
+        """Now and then, compare with the store: a replica holding a revision the store does
+        not have, or another digest at a revision both have, applied a change that did not
+        come from the store (a forged publication, a replica bug): it reloads."""
+        while True:
+            await anyio.sleep(self.check_every)
+            before = self.state.revision  # every revision held now was committed before
+            try:
+                info = raise_for_error(await self.transport.request(Info(), timeout=self.timeout))
+            except WmError as exc:
+                _log.debug("replica check: the store did not answer (%s)", exc)
+                continue
+            assert isinstance(info, InfoReply)
+            mine = self._recent.get(info.revision)
+            if info.revision < before:
+                why = f"it holds revision {before}, the store is at {info.revision}"
+            elif mine and info.digest and mine != info.digest:
+                why = f"its revision {info.revision} is not the store's"
+            else:
+                continue
+            async with self._lock:
+                await self._diverged(why)
+
+    async def wait_for_snapshot(self, count: int) -> None:
+        """Return once the replica has loaded ``count`` snapshots in all (the first at start;
+        more after a divergence or a compacted history): :meth:`statistics` tells how many."""
+        while self._snapshots < count:
+            await self._reloaded.wait()
+
+    async def _diverged(self, why: str) -> None:
+        self.divergences += 1
+        _log.warning("the world-model replica diverged from the store (%s); reloading", why)
+        await self._load_snapshot()
 
     async def _accept(self, change: Change) -> None:
         if change.revision <= self.state.revision:
+            mine = self._recent.get(change.revision)
+            if mine and change.digest and mine != change.digest:
+                await self._diverged(f"two changes at revision {change.revision}")
             return
         if change.revision != self.state.revision + 1:
             self._gaps += 1
@@ -137,8 +197,11 @@ class Replica:
             replay, self.base_ontology, state.ontology_log
         )
         self.state = state
+        self._recent = {state.revision: state.digest}
         self._follow_spatial()
         self._snapshots += 1
+        self._reloaded.set()
+        self._reloaded = anyio.Event()
         self._notify()
 
     async def _fetch_core(self) -> None:
@@ -161,6 +224,10 @@ class Replica:
                 self.ontology = replay(self.ontology, [delta])
                 self._follow_spatial()
         self.state.revision = change.revision
+        self.state.digest = change.digest
+        self._recent[change.revision] = change.digest
+        if len(self._recent) > _RECENT:
+            del self._recent[min(self._recent)]
         self._applied += 1
         for callback in list(self._callbacks):
             try:

@@ -26,7 +26,7 @@ import pytest
 from meshlink import MeshConfig, open_mesh
 from meshlink.rpc import encode
 from wm_store import WmClient, ZenohTransport
-from wm_store.protocol import AddElement, Change, Element, TemplateDef
+from wm_store.protocol import AddElement, Change, Element, ElementPut, TemplateDef
 
 from .procs import ROOT, Child, start_store, start_worker
 
@@ -182,6 +182,48 @@ def test_replica_detects_gaps_and_resyncs(
                 await writer.add_element("Gear", "after")
                 await lossy.wait_for_revision(writer.revision)
                 assert digest(lossy) == digest(writer)
+
+        anyio.run(main)
+    finally:
+        store.stop()
+
+
+def test_a_forged_change_on_an_open_mesh_is_found_and_the_real_one_applied(
+    router_endpoint: str, tmp_path: Path, mesh_name: str
+) -> None:
+    """Anyone on an open mesh can publish on ``wm/changes``: a replica that applied a forged
+    change at the next revision finds it when the store's real change of that revision comes
+    (another digest), reloads, and holds the real one."""
+    store = start_store(router_endpoint, mesh_name, tmp_path / "wm")
+    try:
+
+        async def main() -> None:
+            config = MeshConfig(connect=(router_endpoint,), mesh=mesh_name)
+            async with (
+                open_mesh(config) as s1,
+                open_mesh(config) as s2,
+                WmClient.connect(ZenohTransport(s1)) as replica,
+                WmClient.connect(ZenohTransport(s2)) as writer,
+            ):
+                await writer.add_element("Gear", "before")
+                await replica.wait_for_revision(writer.revision)
+                fake = Element(id="Gear-99", type="Gear", label="forged")
+                forged = Change(
+                    revision=writer.revision + 1, deltas=[ElementPut(fake)], stamp=0.0, digest="x"
+                )
+                s2.put(s2.keys.wm_changes(), encode(forged))
+                with anyio.fail_after(10):
+                    await replica.wait_for_revision(writer.revision + 1)
+                assert replica.find_element("Gear-99") is not None, "applied: it looked real"
+                real = await writer.add_element("Box", "real")
+                real_revision = writer.revision
+                with anyio.fail_after(10):  # both replicas got the forgery: both reload
+                    for wm in (replica, writer):
+                        await wm.replica.wait_for_snapshot(2)
+                        await wm.wait_for_revision(real_revision)
+                assert replica.find_element("Gear-99") is None
+                assert replica.find_element(real) is not None
+                assert digest(replica) == digest(writer)
 
         anyio.run(main)
     finally:

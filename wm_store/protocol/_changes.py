@@ -73,3 +73,7 @@ class Change(Struct, kw_only=True):
     ids: dict[str, str] = {}
     """Ids assigned to added elements, by the ``ref`` the writer gave them."""
     schema_version: int = SCHEMA_VERSION
+    digest: str = ""
+    """The store's chain digest after this change (a hash of the previous digest and this
+    change's deltas): two changes of one revision with different digests mean a replica
+    applied one that did not come from the store."""

@@ -55,6 +55,8 @@ class SnapshotReply(Struct, tag=True, tag_field="reply", kw_only=True):
     core_digest: str = ""
     """SHA-256 of the store's core ontology text: a client whose own core file differs
     fetches the store's with :class:`~wm_store.protocol.GetOntology`."""
+    digest: str = ""
+    """The store's chain digest at ``revision`` (see :class:`~wm_store.protocol.Change`)."""
 
 
 class OntologyReply(Struct, tag=True, tag_field="reply", kw_only=True):
@@ -82,6 +84,9 @@ class InfoReply(Struct, tag=True, tag_field="reply", kw_only=True):
     data_dir: str
     started_at: float
     schema_version: int = SCHEMA_VERSION
+    digest: str = ""
+    """The chain digest at ``revision``: a replica at that revision with another digest
+    diverged and reloads (see :class:`~wm_store.protocol.Change`)."""
 
 
 class CardinalityViolation(Struct, frozen=True, kw_only=True):

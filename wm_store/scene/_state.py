@@ -74,6 +74,8 @@ class SceneState:
 
     def __init__(self) -> None:
         self.revision = 0
+        self.digest = ""
+        """The store's chain digest at :attr:`revision` (see ``Change.digest``)."""
         self.elements: dict[str, Element] = {}
         self.ontology_log: list[OntologyDelta] = []
         """What the ontology gained beyond the core, in order (replayed by
@@ -310,6 +312,7 @@ class SceneState:
             relations=self.all_relations(),
             counters=dict(self.counters),
             ontology=list(self.ontology_log),
+            digest=self.digest,
         )
 
     @classmethod
@@ -329,6 +332,7 @@ class SceneState:
         for name, n in snap.counters.items():
             state.counters[name] = max(n, state.counters.get(name, 0))
         state.revision = snap.revision
+        state.digest = snap.digest
         return state
 
     def copy(self) -> SceneState:

@@ -16,6 +16,7 @@ periodic snapshots. Without a data directory the store is memory-only (tests, th
 
 from __future__ import annotations
 
+import hashlib
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
@@ -69,6 +70,12 @@ class StoreConfig(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_on
     """Largest number of ops one transaction may carry."""
     dedupe: Annotated[int, Meta(ge=0)] = 10_000
     """How many recent transaction ids are remembered for idempotent retries."""
+
+
+def chain_digest(previous: str, deltas: bytes) -> str:
+    """The digest after a change: BLAKE2b-128 of the previous digest and the change's encoded
+    deltas (hex)."""
+    return hashlib.blake2b(previous.encode() + deltas, digest_size=16).hexdigest()
 
 
 class _DiskSnapshot(msgspec.Struct):
@@ -135,6 +142,9 @@ class WmStore:
                 )
             undo = [self.state.apply(d) for d in change.deltas]
             self.state.revision = seq
+            self.state.digest = change.digest or chain_digest(
+                self.state.digest, encode(change.deltas)
+            )
             self._remember(_Entry(change, payload, undo))
         self._reload_ontology()
         self._published = self.state.revision
@@ -209,6 +219,7 @@ class WmStore:
         if not result.deltas:  # nothing changed (e.g. terms the ontology already has)
             return TransactReply(revision=self.state.revision, ids=result.ids)
         self.state.revision = revision
+        self.state.digest = chain_digest(self.state.digest, encode(result.deltas))
         self.ontology = result.ontology
         refs = {k: v for k, v in result.ids.items() if not k.startswith("#")}
         change = Change(
@@ -218,6 +229,7 @@ class WmStore:
             txn_id=request.txn_id,
             author=request.author,
             ids=refs,
+            digest=self.state.digest,
         )
         entry = _Entry(change, encode(change), result.undo)
         reply = TransactReply(revision=revision, ids=result.ids)
@@ -328,6 +340,9 @@ class WmStore:
             for record in reversed(entry.undo):
                 past.undo(record)
         past.revision = revision
+        past.digest = next(
+            (e.change.digest for e in self._history if e.change.revision == revision), ""
+        )
         return past.to_snapshot()
 
     def oldest_revision(self) -> int:
@@ -362,4 +377,5 @@ class WmStore:
             durability=self.config.durability if self.config.data_dir else "memory",
             data_dir=self.config.data_dir or "",
             started_at=self.started_at,
+            digest=self.state.digest,
         )
