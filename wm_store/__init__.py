@@ -32,6 +32,7 @@ speaks, request decoding and handling, and raising an error reply by its code.
 
 from ._batches import transact_in_batches as transact_in_batches
 from ._client import WmClient as WmClient
+from ._describe import describe_change as describe_change
 from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
 from ._errors import CorruptLogError as CorruptLogError
@@ -102,6 +103,7 @@ __all__ = [
     "WmError",
     "WmTransport",
     "ZenohTransport",
+    "describe_change",
     "display_name",
     "registration_ops",
     "transact_in_batches",

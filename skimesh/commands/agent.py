@@ -31,6 +31,7 @@ from wm_store import WmClient, WmError, ZenohTransport
 from wm_store.ontology import TYPED_KINDS
 from wm_store.protocol import Value
 
+from ..errors import SkimeshError
 from ..runtime import run_service
 from ._connect import mesh_session
 
@@ -239,7 +240,7 @@ def _serve(args: argparse.Namespace) -> int:
     return run_service(main)
 
 
-class _AgentFailed(Exception):
+class _AgentFailed(SkimeshError):
     """One agent of the process stopped with an error the user can act on."""
 
     def __init__(self, agent: str, cause: Exception) -> None:

@@ -2,7 +2,8 @@
 
 - :class:`MissionRecording` logs task events, the plan, each robot's active skill and progress
   and every world-model change into the world's recording stream (:class:`CallText`,
-  :func:`step_text`, :func:`describe_change`: the lines it writes);
+  :func:`step_text`: the lines it writes; :func:`wm_store.describe_change` words the
+  world-model changes);
 - :func:`record_agent_events` follows the skill agents' event logs into it
   (:class:`AgentEventLines`, :func:`entry_line`, :func:`describe_ops`);
 - :func:`blueprint` is the viewer's layout; :func:`inspect_recording`, :func:`frame`,
@@ -26,7 +27,6 @@ from ._inspect import cut_recording as cut_recording
 from ._inspect import inspect_recording as inspect_recording
 from ._mission import CallText as CallText
 from ._mission import MissionRecording as MissionRecording
-from ._mission import describe_change as describe_change
 from ._mission import step_text as step_text
 
 __all__ = [
@@ -37,7 +37,6 @@ __all__ = [
     "RecordingFacts",
     "blueprint",
     "cut_recording",
-    "describe_change",
     "describe_ops",
     "entry_line",
     "frame",

@@ -43,23 +43,17 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
+from wm_store import describe_change
 from wm_store.protocol import (
     Change,
-    ClassDefined,
-    ElementPut,
-    ElementRemoved,
-    RelationAdded,
-    RelationRemoved,
-    TemplateDefined,
     Value,
 )
 
 from ._agents import AgentEventLines
 
-__all__ = ["CallText", "MissionRecording", "describe_change", "step_text"]
+__all__ = ["CallText", "MissionRecording", "step_text"]
 
 LabelOf = Callable[[str], str]
-_MAX_ITEMS = 6
 
 
 def step_text(skill: str, params: Mapping[str, Value], label_of: LabelOf) -> str:
@@ -96,34 +90,6 @@ class CallText:
             return spec.kind == "online" or (spec.kind == "offline" and value != spec.default)
 
         return step_text(skill, {k: v for k, v in params.items() if shown(k, v)}, self.label_of)
-
-
-def describe_change(change: Change, label_of: LabelOf) -> str:
-    """One line for a committed transaction: revision, author and what it did (each delta
-    when there are a few, else counts)."""
-    items: list[str] = []
-    counts = {"put": 0, "removed": 0, "+rel": 0, "-rel": 0, "defined": 0}
-    for delta in change.deltas:
-        match delta:
-            case ElementPut(element=e):
-                counts["put"] += 1
-                items.append(f"put {e.label or e.id}")
-            case ElementRemoved(id=eid):
-                counts["removed"] += 1
-                items.append(f"removed {eid}")
-            case RelationAdded(relation=r) | RelationRemoved(relation=r):
-                sign = "+" if isinstance(delta, RelationAdded) else "-"
-                counts[f"{sign}rel"] += 1
-                items.append(f"{sign}{r.predicate}({label_of(r.subject)}, {label_of(r.object)})")
-            case ClassDefined() | TemplateDefined():
-                counts["defined"] += 1
-                items.append(type(delta).__name__)
-    items = list(dict.fromkeys(items))  # an element updated twice in one transaction: once
-    head = f"rev {change.revision} by {change.author or '?'}:"
-    if len(items) <= _MAX_ITEMS:
-        return f"{head} {', '.join(items) or 'no change'}"
-    what = ", ".join(f"{n} {k}" for k, n in counts.items() if n)
-    return f"{head} {len(change.deltas)} deltas ({what})"
 
 
 class MissionRecording:

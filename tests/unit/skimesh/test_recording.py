@@ -16,7 +16,7 @@ from scenario.wm import scenario_ops
 from skill_agent.runtime import load_config
 from skill_agent.server import agent_registration
 from skill_agent.skills import Navigate, Pick, Place
-from skimesh.recording import CallText, MissionRecording, describe_change, step_text
+from skimesh.recording import CallText, MissionRecording, step_text
 from task_agent.protocol import (
     Planned,
     PlannedStep,
@@ -28,7 +28,7 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
-from wm_store import InMemoryTransport, WmClient
+from wm_store import InMemoryTransport, WmClient, describe_change
 from wm_store.ontology import Ontology
 from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
 from wm_store.server import WmService, WmStore
