@@ -27,11 +27,11 @@ from wm_store.protocol import (
     TemplateDef,
     TemplateDefined,
     TermsDefined,
-    Value,
 )
 
 from ..runtime import run_service
 from ._connect import read_terms, wm_session
+from ._edit import parse_assignments
 
 __all__ = ["add_ontology_commands"]
 
@@ -199,20 +199,8 @@ async def _define_class(args: argparse.Namespace, wm: WmClient) -> int:
     return 0
 
 
-def _value(raw: str) -> Value:
-    try:
-        return msgspec.json.decode(raw.encode(), type=Value)  # type: ignore[no-any-return]
-    except msgspec.DecodeError:
-        return raw  # plain text
-
-
 async def _define_template(args: argparse.Namespace, wm: WmClient) -> int:
-    properties: dict[str, Value] = {}
-    for item in args.set:
-        name, sep, raw = item.partition("=")
-        if not sep or not name:
-            raise SystemExit(f"--set takes PROP=VALUE, not {item!r}")
-        properties[name] = _value(raw)
+    properties = parse_assignments(args.set)
     template = TemplateDef(name=args.name, type=args.type, label=args.label, properties=properties)
     revision = await wm.define_template(template)
     print(f"template {args.name} (a {args.type}) taught at revision {revision}")

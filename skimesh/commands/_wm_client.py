@@ -26,6 +26,7 @@ from wm_store.scene import SceneState, id_sort_key
 
 from ..runtime import run_service
 from ._connect import wm_session
+from ._edit import add_edit_commands
 from ._render import element_line, render_tree
 from ._teach import add_ontology_commands
 
@@ -39,6 +40,7 @@ def add_client_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     _add_read_commands(cmds)
     _add_write_commands(cmds)
     add_ontology_commands(cmds)
+    add_edit_commands(cmds)
     for sub in cmds.choices.values():  # the connection options also after the sub-command
         add_mesh_arguments(sub, repeat=True)
         sub.add_argument(

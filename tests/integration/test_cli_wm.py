@@ -279,3 +279,51 @@ def test_an_import_over_one_transactions_limit_goes_in_batches(
         assert info["elements"] == 10_010
     finally:
         assert store.stop() == 0, store.log()
+
+
+def test_writes_watch_and_history_from_the_command_line(
+    router_endpoint: str, mesh_name: str, tmp_path: Path
+) -> None:
+    store = start_store(router_endpoint, mesh_name, tmp_path / "wm")
+    common = ["--connect", router_endpoint, "--mesh", mesh_name]
+    watch = Child(["-m", "skimesh", "wm", *common, "watch", "--json"], name="watch")
+    try:
+        watch.wait_stderr("following")
+        box = skimesh("wm", *common, "add", "Box", "--label", "bin-a")
+        assert box.returncode == 0, box.stderr
+        box_id = box.stdout.strip()
+        gear = skimesh(
+            "wm", *common, "add", "Gear", "--label", "gear-z", "--set", "mass=0.12", "--in", box_id
+        )
+        assert gear.returncode == 0, gear.stderr
+        gear_id = gear.stdout.strip()
+        seen = watch.expect(lambda c: any("element" in d and d["element"]["id"] == gear_id
+                                          for d in c["deltas"]))  # fmt: skip
+        assert seen["author"] == "cli"
+
+        steps = [
+            ("update", gear_id, "--set", "mass=0.2", "--label", "gear-y"),
+            ("relate", box_id, "near", gear_id),
+            ("unrelate", box_id, "near", gear_id),
+        ]
+        for step in steps:
+            done = skimesh("wm", *common, *step)
+            assert done.returncode == 0 and "revision" in done.stdout, done.stderr
+        got = json.loads(skimesh("wm", *common, "get", gear_id).stdout)[0]
+        assert got["label"] == "gear-y" and got["properties"]["mass"] == 0.2
+
+        wrong = skimesh("wm", *common, "update", gear_id, "--set", "mass=-1")
+        assert wrong.returncode != 0 and "mass" in wrong.stderr, "checked as any write"
+        twice = skimesh("wm", *common, "add", "Box", "--label", "bin-a")
+        assert twice.returncode != 0 and "bin-a" in twice.stderr, "labels are unique"
+
+        history = skimesh("wm", *common, "history", "--since", "1")
+        lines = history.stdout.strip().splitlines()
+        assert history.returncode == 0 and len(lines) == 4, history.stdout
+        assert lines[0].startswith("rev 2 by cli: put gear-z") and "+near" in lines[2]
+        removed = skimesh("wm", *common, "remove", box_id, "--branch")
+        assert removed.returncode == 0, removed.stderr
+        assert skimesh("wm", *common, "get", gear_id).returncode != 0, "removed with its box"
+    finally:
+        watch.stop()
+        assert store.stop() == 0, store.log()

@@ -1,0 +1,194 @@
+"""The editing and following sub-commands of ``skimesh wm``: ``add``, ``update``,
+``remove``, ``relate``, ``unrelate`` write the world model (one transaction each, checked by
+the store as any write: the ontology's classes, properties, domains, cardinalities, the scene
+tree, unique names); ``watch`` prints every change as it is committed, in words; ``history``
+prints the changes since a revision (those the store still keeps).
+
+Values given as ``PROP=VALUE`` are JSON (typed values such as poses, lists) or a number,
+``true``/``false`` or text.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Awaitable, Callable
+
+import msgspec
+
+from wm_store import WmClient, describe_change, display_name
+from wm_store.protocol import (
+    AddElement,
+    Change,
+    ChangesReply,
+    ChangesSince,
+    Relation,
+    Value,
+)
+
+from ..runtime import run_service
+from ._connect import wm_session
+
+__all__ = ["add_edit_commands", "parse_assignments"]
+
+Body = Callable[[argparse.Namespace, WmClient], Awaitable[int]]
+_VALUES = "PROP=VALUE: JSON (a pose, a list), a number, true/false or text"
+
+
+def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``add``, ``update``, ``remove``, ``relate``, ``unrelate``, ``watch``, ``history``."""
+    add = cmds.add_parser(
+        "add",
+        help="add an element",
+        description="Add an element of class TYPE, e.g. `skimesh wm add Gear --label gear-7 "
+        "--set mass=0.1 --in PartBox-1`. Prints its id.",
+    )
+    add.add_argument("type", help="its class, e.g. Gear")
+    add.add_argument("--label", default="", help="its label (unique in the scene)")
+    add.add_argument("--set", action="append", default=[], metavar="PROP=VALUE", help=_VALUES)
+    add.add_argument("--in", dest="parent", metavar="ID", help="its spatial parent")
+    add.add_argument(
+        "--relation", default="contain", help="how the parent holds it (default: contain)"
+    )
+    add.set_defaults(func=lambda a: _client(a, _add))
+
+    upd = cmds.add_parser(
+        "update",
+        help="change an element's properties or label",
+        description="Merge properties into an element (`--set`), remove some (`--unset`), "
+        "relabel it (`--label`), e.g. `skimesh wm update Gear-1 --set mass=0.2`.",
+    )
+    upd.add_argument("id", help="the element, e.g. Gear-1")
+    upd.add_argument("--set", action="append", default=[], metavar="PROP=VALUE", help=_VALUES)
+    upd.add_argument("--unset", action="append", default=[], metavar="PROP", help="remove it")
+    upd.add_argument("--label", default=None, help="a new label")
+    upd.set_defaults(func=lambda a: _client(a, _update))
+
+    rm = cmds.add_parser(
+        "remove",
+        help="remove an element",
+        description="Remove an element (`--branch`: with everything it spatially holds).",
+    )
+    rm.add_argument("id", help="the element, e.g. Gear-1")
+    rm.add_argument("--branch", action="store_true", help="with everything it holds")
+    rm.set_defaults(func=lambda a: _client(a, _remove))
+
+    for name, verb in (("relate", "set"), ("unrelate", "unset")):
+        rel = cmds.add_parser(
+            name,
+            help=f"{verb} a relation SUBJECT PREDICATE OBJECT",
+            description=f"{verb.capitalize()} a relation, e.g. `skimesh wm {name} KitBox-1 "
+            "contain Gear-1` (a spatial relation moves the object in the scene tree).",
+        )
+        rel.add_argument("subject", help="an element id")
+        rel.add_argument("predicate", help="a relation of the ontology, e.g. contain")
+        rel.add_argument("object", help="an element id")
+        rel.set_defaults(func=lambda a, n=name: _client(a, _relate if n == "relate" else _unrelate))
+
+    watch = cmds.add_parser(
+        "watch",
+        help="print every change of the world model as it is committed",
+        description="Follow the world model: one line per committed transaction (revision, "
+        "author, what it did), until Ctrl-C. --json: each change as JSON.",
+    )
+    watch.add_argument("--json", action="store_true", help="one JSON change per line")
+    watch.set_defaults(func=lambda a: _client(a, _watch))
+
+    hist = cmds.add_parser(
+        "history",
+        help="print the changes since a revision",
+        description="The changes the store still keeps after revision --since (default: "
+        "all it keeps), one line each. --json: as JSON.",
+    )
+    hist.add_argument("--since", type=int, default=0, metavar="REV", help="after this revision")
+    hist.add_argument("--json", action="store_true", help="one JSON change per line")
+    hist.set_defaults(func=lambda a: _client(a, _history))
+
+
+def parse_assignments(items: list[str]) -> dict[str, Value]:
+    """``PROP=VALUE`` items as properties; SystemExit naming a malformed one."""
+    out: dict[str, Value] = {}
+    for item in items:
+        name, sep, raw = item.partition("=")
+        if not sep or not name:
+            raise SystemExit(f"--set takes PROP=VALUE, not {item!r}")
+        try:
+            out[name] = msgspec.json.decode(raw.encode(), type=Value)
+        except msgspec.DecodeError:
+            out[name] = raw  # plain text
+    return out
+
+
+def _client(args: argparse.Namespace, body: Body) -> int:
+    async def main() -> int:
+        async with wm_session(args) as wm:
+            return await body(args, wm)
+
+    return run_service(main)
+
+
+async def _add(args: argparse.Namespace, wm: WmClient) -> int:
+    relations = [Relation(args.parent, args.relation, "$")] if args.parent else []
+    op = AddElement(
+        type=args.type,
+        label=args.label,
+        properties=parse_assignments(args.set),
+        relations=relations,
+        ref="$new",
+    )
+    reply = await wm.transact([op])
+    print(reply.ids["$new"])
+    return 0
+
+
+async def _update(args: argparse.Namespace, wm: WmClient) -> int:
+    properties = parse_assignments(args.set)
+    if not (properties or args.unset or args.label is not None):
+        raise SystemExit("nothing to change: give --set, --unset or --label")
+    revision = await wm.update_element(args.id, properties, remove=args.unset, label=args.label)
+    print(f"{display_name(wm.find_element(args.id), args.id)} updated at revision {revision}")
+    return 0
+
+
+async def _remove(args: argparse.Namespace, wm: WmClient) -> int:
+    name = display_name(wm.find_element(args.id), args.id)
+    if args.branch:
+        revision = await wm.remove_branch(args.id)
+    else:
+        revision = await wm.remove_element(args.id)
+    print(f"{name} removed at revision {revision}")
+    return 0
+
+
+async def _relate(args: argparse.Namespace, wm: WmClient) -> int:
+    revision = await wm.set_relation(args.subject, args.predicate, args.object)
+    print(f"{args.predicate}({args.subject}, {args.object}) set at revision {revision}")
+    return 0
+
+
+async def _unrelate(args: argparse.Namespace, wm: WmClient) -> int:
+    revision = await wm.unset_relation(args.subject, args.predicate, args.object)
+    print(f"{args.predicate}({args.subject}, {args.object}) unset at revision {revision}")
+    return 0
+
+
+def _line(change: Change, wm: WmClient, as_json: bool) -> str:
+    if as_json:
+        return msgspec.json.encode(change).decode()
+    return describe_change(change, lambda i: display_name(wm.find_element(i), i))
+
+
+async def _watch(args: argparse.Namespace, wm: WmClient) -> int:
+    print(f"# world model at revision {wm.revision}; following (Ctrl-C stops)", file=sys.stderr)
+    async with wm.watch() as changes:
+        async for change in changes:
+            print(_line(change, wm, args.json), flush=True)
+    return 0
+
+
+async def _history(args: argparse.Namespace, wm: WmClient) -> int:
+    reply = await wm.request(ChangesSince(revision=max(0, args.since)))
+    assert isinstance(reply, ChangesReply)
+    for change in reply.changes:
+        print(_line(change, wm, args.json))
+    return 0
