@@ -89,6 +89,11 @@ def _parse_into(graph: Graph, source: Path | str) -> None:
         raise OntologyError(f"cannot parse {path}: {exc}") from exc
 
 
+def _explicit_iris(iris: Mapping[str, URIRef]) -> dict[str, URIRef]:
+    """The IRIs that are not the default one of their name (``skm:<name>``)."""
+    return {name: iri for name, iri in iris.items() if iri != SKM[name]}
+
+
 def _read(source: Path | str) -> str:
     """The text of a source (a Turtle text is itself); a file not in Turtle is marked by a
     leading NUL, so :meth:`Ontology.core_turtle` serializes its graph instead."""
@@ -229,21 +234,38 @@ class Ontology(OntologyValues):
         if self._taught is not None:
             taught += self._taught
         taught += parsed
-        whole = base
-        if self._added_classes or self._added_templates:
-            whole = base + self._extension_graph()
         where = f"the terms from {source}" if source else "the taught terms"
         try:
-            decl = compile_graph(whole)
-            return Ontology(
-                decl,
-                base,
-                added_classes=self._added_classes,
-                added_templates=self._added_templates,
-                taught=taught,
-            )
+            result = self._rebuilt(base, taught)
         except (OntologyError, ValidationError) as exc:
             raise OntologyError(f"{where} do not fit the ontology: {exc}") from exc
+        return self if result.same_terms(self) else result
+
+    def _rebuilt(self, base: Graph, taught: Graph) -> Ontology:
+        """``base`` compiled, with the classes and templates :meth:`extend` added replayed on
+        it, so an ontology taught nothing new compares equal to this one; when the new terms
+        name one of those classes (or declare it again), the whole graph is compiled."""
+        added = list(self._added_templates.values())
+        try:
+            plain = Ontology(compile_graph(base), base, taught=taught)
+            return plain.extend(classes=self._added_classes, templates=added)
+        except (OntologyError, ValidationError):
+            if not (self._added_classes or self._added_templates):
+                raise
+        decl = compile_graph(base + self._extension_graph())
+        mine = self._decl  # what extend() made of them, as this ontology holds them
+        decl = dataclasses.replace(
+            decl,
+            classes={**decl.classes, **{c.name: mine.classes[c.name] for c in self._added_classes}},
+            templates={**decl.templates, **self._added_templates},
+        )
+        return Ontology(
+            decl,
+            base,
+            added_classes=self._added_classes,
+            added_templates=self._added_templates,
+            taught=taught,
+        )
 
     @property
     def digest(self) -> str:
@@ -261,8 +283,12 @@ class Ontology(OntologyValues):
         return self._base.serialize(format="turtle")
 
     def same_terms(self, other: Ontology) -> bool:
-        """True when both declare the same classes, properties, restrictions and templates."""
-        return self._decl == other._decl
+        """True when both declare the same classes, properties, restrictions and templates
+        (a name in the skimesh namespace counts the same whether or not its IRI is listed)."""
+        mine, theirs = self._decl, other._decl
+        if dataclasses.replace(mine, iris={}) != dataclasses.replace(theirs, iris={}):
+            return False
+        return _explicit_iris(mine.iris) == _explicit_iris(theirs.iris)
 
     # ----------------------------------------------------------------------- graph views
 

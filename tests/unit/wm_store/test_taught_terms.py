@@ -28,6 +28,7 @@ from wm_store.protocol import (
     OntologyReply,
     Snapshot,
     SnapshotReply,
+    TemplateDef,
     TermsDef,
     TermsDefined,
     Transact,
@@ -180,3 +181,22 @@ async def test_an_empty_transaction_is_refused_and_a_no_op_commits_nothing() -> 
         revision = s.revision
         again = await s.transact(Transact(ops=[DefineTerms(terms=TermsDef(turtle=BEARING))]))
         assert again.revision == revision == s.revision, "known terms: no new revision"
+
+
+async def test_known_terms_change_nothing_after_run_time_classes_and_templates() -> None:
+    """Classes and templates taught one by one (define_class, define_template) beside Turtle
+    terms: teaching the same file again is still a no-op."""
+    store = WmStore(Ontology.default())
+    async with running(store) as s, WmClient.connect(InMemoryTransport(WmService(s))) as wm:
+        await wm.teach(BEARING, source="bearing.ttl")
+        await wm.define_class("Pulley", "Part")
+        await wm.define_template(
+            TemplateDef(name="big-pulley", type="Pulley", properties={"mass": 0.4})
+        )
+        rev = s.revision
+        assert await wm.teach(BEARING, source="bearing.ttl") == rev
+        # Terms that name a class taught with define_class are accepted too.
+        text = relation_turtle("heldBy", domain=["Pulley"], range=["Bearing"])
+        assert await wm.teach(text, source="cli") == rev + 1
+        assert wm.ontology.relation("heldBy").domain == "Pulley"
+        assert wm.ontology.template("big-pulley").properties == {"mass": 0.4}
