@@ -29,7 +29,7 @@ from wm_store.protocol import (
 from ..runtime import run_service
 from ._connect import wm_session
 
-__all__ = ["add_edit_commands", "parse_assignments"]
+__all__ = ["Body", "add_edit_commands", "client", "parse_assignments"]
 
 Body = Callable[[argparse.Namespace, WmClient], Awaitable[int]]
 _VALUES = "PROP=VALUE: JSON (a pose, a list), a number, true/false or text"
@@ -50,7 +50,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
     add.add_argument(
         "--relation", default="contain", help="how the parent holds it (default: contain)"
     )
-    add.set_defaults(func=lambda a: _client(a, _add))
+    add.set_defaults(func=lambda a: client(a, _add))
 
     upd = cmds.add_parser(
         "update",
@@ -62,7 +62,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
     upd.add_argument("--set", action="append", default=[], metavar="PROP=VALUE", help=_VALUES)
     upd.add_argument("--unset", action="append", default=[], metavar="PROP", help="remove it")
     upd.add_argument("--label", default=None, help="a new label")
-    upd.set_defaults(func=lambda a: _client(a, _update))
+    upd.set_defaults(func=lambda a: client(a, _update))
 
     rm = cmds.add_parser(
         "remove",
@@ -71,7 +71,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
     )
     rm.add_argument("id", help="the element, e.g. Gear-1")
     rm.add_argument("--branch", action="store_true", help="with everything it holds")
-    rm.set_defaults(func=lambda a: _client(a, _remove))
+    rm.set_defaults(func=lambda a: client(a, _remove))
 
     for name, verb in (("relate", "set"), ("unrelate", "unset")):
         rel = cmds.add_parser(
@@ -83,7 +83,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
         rel.add_argument("subject", help="an element id")
         rel.add_argument("predicate", help="a relation of the ontology, e.g. contain")
         rel.add_argument("object", help="an element id")
-        rel.set_defaults(func=lambda a, n=name: _client(a, _relate if n == "relate" else _unrelate))
+        rel.set_defaults(func=lambda a, n=name: client(a, _relate if n == "relate" else _unrelate))
 
     watch = cmds.add_parser(
         "watch",
@@ -92,7 +92,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
         "author, what it did), until Ctrl-C. --json: each change as JSON.",
     )
     watch.add_argument("--json", action="store_true", help="one JSON change per line")
-    watch.set_defaults(func=lambda a: _client(a, _watch))
+    watch.set_defaults(func=lambda a: client(a, _watch))
 
     hist = cmds.add_parser(
         "history",
@@ -102,7 +102,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
     )
     hist.add_argument("--since", type=int, default=0, metavar="REV", help="after this revision")
     hist.add_argument("--json", action="store_true", help="one JSON change per line")
-    hist.set_defaults(func=lambda a: _client(a, _history))
+    hist.set_defaults(func=lambda a: client(a, _history))
 
 
 def parse_assignments(items: list[str]) -> dict[str, Value]:
@@ -119,7 +119,9 @@ def parse_assignments(items: list[str]) -> dict[str, Value]:
     return out
 
 
-def _client(args: argparse.Namespace, body: Body) -> int:
+def client(args: argparse.Namespace, body: Body) -> int:
+    """Run ``body`` with a world-model client for one command; its exit code."""
+
     async def main() -> int:
         async with wm_session(args) as wm:
             return await body(args, wm)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Awaitable, Callable
 
 import anyio
 import msgspec
@@ -29,8 +28,8 @@ from wm_store.protocol import (
     TermsDefined,
 )
 
-from ..runtime import run_service
-from ._connect import read_terms, wm_session
+from ._connect import read_terms
+from ._edit import client as _client
 from ._edit import parse_assignments
 
 __all__ = ["add_ontology_commands"]
@@ -124,17 +123,6 @@ def add_ontology_commands(cmds: argparse._SubParsersAction[argparse.ArgumentPars
 def _annotations(p: argparse.ArgumentParser) -> None:
     p.add_argument("--label", default="", help="a readable name (rdfs:label)")
     p.add_argument("--comment", default="", help="what it means (rdfs:comment)")
-
-
-Body = Callable[[argparse.Namespace, WmClient], Awaitable[int]]
-
-
-def _client(args: argparse.Namespace, body: Body) -> int:
-    async def main() -> int:
-        async with wm_session(args) as wm:
-            return await body(args, wm)
-
-    return run_service(main)
 
 
 def _source(delta: ClassDefined | TemplateDefined | TermsDefined) -> str:
