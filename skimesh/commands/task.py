@@ -348,6 +348,8 @@ async def _submit(args: argparse.Namespace) -> int:
 
 
 async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) -> int:
+    if not (args.json or args.no_progress) and sys.stdout.isatty():
+        return await _follow_live(events)
     show: Callable[[TaskEvent], None] = print_json if args.json else ProgressPrinter()
     async for event in events:
         if not (args.no_progress and isinstance(event, StepProgress)):
@@ -357,6 +359,22 @@ async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) ->
                 return EXIT_CONTRADICTED
             return EXIT_CODES.get(event.outcome, EXIT_ERROR)
     return EXIT_ERROR  # pragma: no cover - the stream ends with TaskFinished
+
+
+async def _follow_live(events: AsyncIterator[TaskEvent]) -> int:
+    """On a terminal: one live view of the task, then its summary (see ``_live``)."""
+    from rich.console import Console
+
+    from ._live import follow_live
+
+    printer = ProgressPrinter()  # keeps the per-robot times for the summary
+    finished = await follow_live(events, Console(), on_event=printer.lines)
+    if finished is None:
+        return EXIT_ERROR
+    print("\n".join(printer.lines(finished)))
+    if finished.check is not None and finished.check.contradicted:
+        return EXIT_CONTRADICTED
+    return EXIT_CODES.get(finished.outcome, EXIT_ERROR)
 
 
 async def _watch(args: argparse.Namespace) -> int:

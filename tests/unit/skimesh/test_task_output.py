@@ -47,3 +47,57 @@ def test_progress_prints_a_line_when_the_text_changes_not_at_every_update() -> N
     ]
     assert len(lines) == 2, lines
     assert "driving to Station-1" in lines[0] and "at Station-1" in lines[1]
+
+
+def test_the_live_view_shows_robots_and_the_plan_as_the_task_goes() -> None:
+    import io
+
+    from rich.console import Console
+
+    from skimesh.commands._live import TaskView
+    from task_agent.protocol import StepFinished, StepStarted, TaskEvent, TaskStarted
+
+    view = TaskView()
+    events: list[TaskEvent] = [
+        TaskStarted(task_id="t-1", seq=1, stamp=100.0, goal="contain(KitBox-1, Gear-1)"),
+        Planned(
+            task_id="t-1",
+            seq=2,
+            stamp=100.1,
+            steps=[
+                PlannedStep(index=0, agent="r1", skill="navigate", params={"goal": "Station-1"}),
+                PlannedStep(
+                    index=1, agent="r1", skill="pick", params={"object": "Gear-1"}, after=[0]
+                ),
+            ],
+            names={"Gear-1": "big gear (Gear-1)"},
+        ),
+        StepStarted(
+            task_id="t-1", seq=3, stamp=100.2, step=0, agent="r1", skill="navigate", run_id="a"
+        ),
+        StepProgress(
+            task_id="t-1",
+            seq=4,
+            stamp=101.0,
+            step=0,
+            agent="r1",
+            state="executing",
+            message="driving to Station-1",
+            fraction=0.5,
+        ),
+    ]
+    for event in events:
+        view.apply(event)
+    out = io.StringIO()
+    Console(file=out, width=120, force_terminal=False, color_system=None).print(
+        view.render(now=102.0)
+    )
+    text = out.getvalue()
+    assert "task t-1: contain(KitBox-1, Gear-1)  (2.0 s)" in text
+    assert "executing driving to Station-1" in text and "50%" in text
+    assert "pick(object=big gear (Gear-1))" in text
+    rows = {line.split("│")[1].strip(): line for line in text.splitlines() if "│" in line}
+    assert "running" in rows["0"] and "waiting" in rows["1"]
+    view.apply(StepFinished(task_id="t-1", seq=5, stamp=103.0, step=0, agent="r1",
+                            skill="navigate", success=True, reason="succeeded"))  # fmt: skip
+    assert view.plan[0].status == "done" and view.robots["r1"].phase == "idle"
