@@ -314,6 +314,7 @@ async def _agents(args: argparse.Namespace) -> int:
     async with mesh_session(args) as mesh:
         alive = set(await list_agents(mesh, timeout=args.timeout))
         registered: dict[str, dict[str, object]] = {}
+        reached = True
         try:
             async with WmClient.connect(ZenohTransport(mesh), timeout=args.timeout) as wm:
                 for agent in wm.resolve_element(type="Agent"):
@@ -325,8 +326,16 @@ async def _agents(args: argparse.Namespace) -> int:
                         "skills": len(wm.query_relation(agent.id, "hasSkill")),
                     }
         except WmError as e:
+            reached = False
             print(f"warning: world model unreachable ({e}); liveliness only", file=sys.stderr)
     names = sorted(alive | set(registered))
+    if not names:
+        where = f"mesh {mesh.keys.mesh!r}"
+        if not reached:
+            print(f"skimesh agents: no agent alive on {where}, and no world model", file=sys.stderr)
+            return EXIT_UNREACHABLE
+        print(f"skimesh agents: no agent on {where}", file=sys.stderr)
+        return EXIT_FAILED
     rows = [{"agent": n, "alive": n in alive, **registered.get(n, {})} for n in names]
     if args.json:
         _print_json(rows)

@@ -62,3 +62,20 @@ def test_an_agent_named_twice_is_refused(router_endpoint: str, mesh_name: str) -
         "--scenario", "kitting", "--robot", "r1", "--robot", "r1", "--simulate",
     )  # fmt: skip
     assert twice.returncode != 0 and "given twice" in twice.stderr, twice.stderr
+
+
+def test_agents_on_an_empty_mesh_say_so(
+    router_endpoint: str, mesh_name: str, tmp_path: Path
+) -> None:
+    common = ["--connect", router_endpoint, "--mesh", mesh_name, "--timeout", "1"]
+    nothing = skimesh("agents", *common)
+    assert nothing.returncode == 3 and "no world model" in nothing.stderr, nothing.stderr
+    store = Child(
+        ["-m", "skimesh", "wm", *common[:4], "--data", str(tmp_path / "wm")], name="store"
+    )
+    try:
+        store.wait_stderr("world model ready")
+        empty = skimesh("agents", *common)
+        assert empty.returncode == 1 and "no agent on mesh" in empty.stderr, empty.stderr
+    finally:
+        store.stop()
