@@ -43,7 +43,8 @@ __all__ = ["SparqlWorker"]
 
 _log = logging.getLogger(__name__)
 _snapshot: Final = msgspec.msgpack.Decoder(SnapshotReply)
-_changes: Final = msgspec.msgpack.Decoder(list[Change])
+_payloads: Final = msgspec.msgpack.Decoder(list[bytes])
+_change: Final = msgspec.msgpack.Decoder(Change)
 
 _NICE: Final = 10
 """The child's CPU priority: below the store's, yet not starved on a busy host (idle
@@ -73,10 +74,11 @@ class SparqlWorker:
         max_text: int = 16 * 1024,
         max_rows: int = 10_000,
         max_waiting: int = 8,
-        core: tuple[str, str] = ("", ""),
+        core: Callable[[], tuple[str, str]] = lambda: ("", ""),
     ) -> None:
         self.core = core
-        """The store's core ontology, (digest, Turtle): the child replays the log on it."""
+        """The store's core ontology, as (digest, Turtle), asked when a child starts: the
+        child replays the store's ontology log on it."""
         self.timeout, self.max_text = timeout, max_text
         self.max_rows, self.max_waiting = max_rows, max_waiting
         self._process: BaseProcess | None = None
@@ -92,9 +94,9 @@ class SparqlWorker:
         self, source: SyncSource, text: str, bindings: Mapping[str, str]
     ) -> SparqlReply:
         """Answer ``text`` over the scene. ``source(revision)`` gives what brings the child's
-        copy from ``revision`` (None: it has none) to the store's: ``("changes", bytes of a
-        list of Change, revision)`` or ``("scene", bytes of a SnapshotReply, revision)``;
-        it is called on the loop. Raises QueryLimitError or ValidationError."""
+        copy from ``revision`` (None: it has none) to the store's, called on the loop:
+        ``("changes", the changes as published, revision)`` or ``("scene", an encoded
+        SnapshotReply, revision)``. Raises QueryLimitError or ValidationError."""
         size = len(text.encode())
         if size > self.max_text:
             raise QueryLimitError(
@@ -148,7 +150,7 @@ class SparqlWorker:
         context = multiprocessing.get_context("spawn")
         parent, child = context.Pipe()
         process = context.Process(
-            target=_serve, args=(child, self.core), name="skimesh-sparql", daemon=True
+            target=_serve, args=(child, self.core()), name="skimesh-sparql", daemon=True
         )
         await anyio.to_thread.run_sync(process.start)
         if process.pid is not None:  # lower its priority at once: its imports cost CPU too
@@ -199,7 +201,8 @@ def _serve(conn: Connection, core: tuple[str, str]) -> None:
                 state = SceneState.from_snapshot(snap, spatial)
                 continue
             if message[0] == "changes":
-                for change in _changes.decode(message[1]):
+                for payload in _payloads.decode(message[1]):
+                    change = _change.decode(payload)
                     for delta in change.deltas:
                         state.apply(delta)
                         if isinstance(delta, ClassDefined | TemplateDefined | TermsDefined):

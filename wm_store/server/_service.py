@@ -72,6 +72,7 @@ class WmService:
             timeout=config.sparql_timeout,
             max_text=config.sparql_max_text,
             max_rows=config.sparql_max_rows,
+            core=store.core_ontology,
         )
         self.rpc: RequestHandler[Request, Reply] = RequestHandler(
             Request, self.handle, max_request_bytes=max_request_bytes, name="wm/rpc"
@@ -85,9 +86,8 @@ class WmService:
         the changes since (cheap), or the whole scene when it has none or they are gone."""
         store = self.store
         if revision is not None and revision >= store.oldest_revision():
-            changes = store.changes_since(revision).changes
-            last = changes[-1].revision if changes else revision
-            return "changes", encode(changes) if changes else b"", last
+            payloads, last = store.encoded_changes_since(revision)
+            return "changes", encode(payloads) if payloads else b"", last
         snapshot = store.snapshot()
         return "scene", encode(snapshot), snapshot.revision
 
@@ -144,7 +144,6 @@ class WmService:
                     revision=state.revision, relations=[] if parent is None else [parent]
                 )
             case Sparql(query=text, bindings=bindings):
-                self._sparql.core = store.core_ontology()
                 return await self._sparql.query(self._sync, text, bindings)
             case Transact():
                 return await store.transact(request)

@@ -352,6 +352,18 @@ class WmStore:
         return self._history[0].change.revision - 1
 
     def changes_since(self, revision: int, limit: int = 0) -> ChangesReply:
+        changes = [e.change for e in self._published_since(revision)]
+        if limit:
+            changes = changes[:limit]
+        return ChangesReply(revision=self._published, changes=changes)
+
+    def encoded_changes_since(self, revision: int) -> tuple[list[bytes], int]:
+        """Like :meth:`changes_since`: each change as the bytes it was published as (nothing
+        is encoded again), and the revision they lead to."""
+        entries = self._published_since(revision)
+        return [e.payload for e in entries], entries[-1].change.revision if entries else revision
+
+    def _published_since(self, revision: int) -> list[_Entry]:
         if revision > self.state.revision:
             raise ConflictError(
                 f"revision {revision} is ahead of the store ({self.state.revision})"
@@ -361,12 +373,7 @@ class WmStore:
                 f"changes after {revision} are no longer kept (oldest: {self.oldest_revision()}); "
                 "take a snapshot instead"
             )
-        changes = [
-            e.change for e in self._history if revision < e.change.revision <= self._published
-        ]
-        if limit:
-            changes = changes[:limit]
-        return ChangesReply(revision=self._published, changes=changes)
+        return [e for e in self._history if revision < e.change.revision <= self._published]
 
     def info(self) -> InfoReply:
         return InfoReply(
