@@ -80,8 +80,6 @@ class SceneState:
         self.ontology_log: list[OntologyDelta] = []
         """What the ontology gained beyond the core, in order (replayed by
         :func:`wm_store.ontology.replay`)."""
-        self.classes: list[ClassDef] = []
-        self.templates: dict[str, TemplateDef] = {}
         self.counters: dict[str, int] = {}
         self.spatial_predicates: frozenset[str] = frozenset()
         self._by_type: dict[str, set[str]] = {}
@@ -200,7 +198,6 @@ class SceneState:
                 return self.remove_relation(r)
             case ClassDefined() | TemplateDefined() | TermsDefined():
                 self.ontology_log.append(delta)
-                self._index_ontology(delta)
                 return _RestoreOntology(len(self.ontology_log) - 1)
         raise TypeError(f"not a delta: {delta!r}")  # pragma: no cover - exhaustive match
 
@@ -218,15 +215,18 @@ class SceneState:
                     self.remove_relation(r)
             case _RestoreOntology(count=count):
                 del self.ontology_log[count:]
-                self.classes, self.templates = [], {}
-                for entry in self.ontology_log:
-                    self._index_ontology(entry)
 
-    def _index_ontology(self, delta: OntologyDelta) -> None:
-        if isinstance(delta, ClassDefined):
-            self.classes.append(delta.cls)
-        elif isinstance(delta, TemplateDefined):
-            self.templates[delta.template.name] = delta.template
+    @property
+    def classes(self) -> list[ClassDef]:
+        """The classes taught at run time (``DefineClass``), in order."""
+        return [d.cls for d in self.ontology_log if isinstance(d, ClassDefined)]
+
+    @property
+    def templates(self) -> dict[str, TemplateDef]:
+        """The templates taught at run time (``DefineTemplate``), the newest of each name."""
+        return {
+            d.template.name: d.template for d in self.ontology_log if isinstance(d, TemplateDefined)
+        }
 
     def put_element(self, element: Element) -> Undo:
         previous = self.elements.get(element.id)

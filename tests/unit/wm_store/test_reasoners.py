@@ -21,6 +21,7 @@ from wm_store.protocol import (
     SizeCylinder,
     SizeSphere,
     TemplateDef,
+    TemplateDefined,
     Value,
 )
 from wm_store.rdf import import_turtle
@@ -288,9 +289,10 @@ def test_classify_ranks_templates_and_classes(ontology: Ontology) -> None:
 
 def test_classify_uses_runtime_templates_and_checks_arguments(ontology: Ontology) -> None:
     state = SceneState()
-    state.templates["BigGear"] = TemplateDef(
+    big = TemplateDef(
         name="BigGear", type="Gear", properties={"size": SizeCylinder(0.031, 0.02), "mass": 0.118}
     )
+    state.apply(TemplateDefined(big))  # as a DefineTemplate writes it
     assert classify(state, ontology, observed_gear(), "Gear", 0.99) == [("BigGear", 1.0)]
     with pytest.raises(UnknownClassError, match="Gear"):
         classify(state, ontology, observed_gear(), "Gera", 0.5)
