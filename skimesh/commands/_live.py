@@ -26,6 +26,8 @@ from task_agent.protocol import (
     TaskStarted,
 )
 
+from ._task_output import planned_after, planned_call
+
 if TYPE_CHECKING:  # rich loads when a view is shown, not for every command
     from rich.console import Console, RenderableType
 
@@ -71,14 +73,8 @@ class TaskView:
                 self.title = f"task {event.task_id}: {event.goal or event.name or '(unnamed)'}"
             case Planned():
                 for s in event.steps:
-                    args = ", ".join(
-                        f"{k}={event.names.get(v, v) if isinstance(v, str) else v}"
-                        for k, v in s.params.items()
-                    )
-                    after = ",".join(map(str, s.after)) or "-"
-                    self.plan[s.index] = _Step(
-                        s.index, s.agent or "any", f"{s.skill}({args})", after
-                    )
+                    call, after = planned_call(s, event.names), planned_after(s)
+                    self.plan[s.index] = _Step(s.index, s.agent or "any", call, after)
                 self.note = f"plan {event.attempt}: {len(event.steps)} steps ({event.planner})"
             case StepStarted():
                 self.robots[event.agent] = _Robot(

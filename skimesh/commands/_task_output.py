@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Mapping
 
 import msgspec
 
 from task_agent.protocol import (
     GoalCheck,
     Planned,
+    PlannedStep,
     Replanning,
     StepFinished,
     StepProgress,
@@ -88,13 +90,9 @@ class ProgressPrinter:
             f"(sequential {event.sequential:.1f} s)"
         )
         rows = []
-        named = event.names
         for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
-            args = ", ".join(
-                f"{k}={named.get(v, v) if isinstance(v, str) else v}" for k, v in s.params.items()
-            )
-            after = ",".join(map(str, s.after)) or "-"
-            rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {s.skill}({args})  after {after}")
+            call, after = planned_call(s, event.names), planned_after(s)
+            rows.append(f"  {s.index:3d}  {s.agent or 'any':<10} {call}  after {after}")
         return [head, *rows]
 
     def _end(self, event: StepFinished) -> str:
@@ -118,6 +116,19 @@ class ProgressPrinter:
         if event.message:
             lines.append(f"  {event.message}")
         return lines + check_lines(event.check)
+
+
+def planned_call(step: PlannedStep, names: Mapping[str, str]) -> str:
+    """``skill(param=value, ...)`` of a planned step, elements by their display ``names``."""
+    args = ", ".join(
+        f"{k}={names.get(v, v) if isinstance(v, str) else v}" for k, v in step.params.items()
+    )
+    return f"{step.skill}({args})"
+
+
+def planned_after(step: PlannedStep) -> str:
+    """The steps a planned step waits for (``-``: none)."""
+    return ",".join(map(str, step.after)) or "-"
 
 
 def step_line(at: str, agent: str, step: int, skill: str, text: str) -> str:
