@@ -29,6 +29,8 @@ __all__ = [
     "ProgressPrinter",
     "check_lines",
     "info_lines",
+    "planned_after",
+    "planned_call",
     "print_json",
     "print_problems",
     "step_line",
