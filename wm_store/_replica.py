@@ -226,8 +226,8 @@ class Replica:
         self.state.revision = change.revision
         self.state.digest = change.digest
         self._recent[change.revision] = change.digest
-        if len(self._recent) > _RECENT:
-            del self._recent[min(self._recent)]
+        if len(self._recent) > _RECENT:  # applied in revision order: the first is the oldest
+            del self._recent[next(iter(self._recent))]
         self._applied += 1
         for callback in list(self._callbacks):
             try:
