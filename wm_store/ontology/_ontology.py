@@ -37,6 +37,7 @@ from rdflib.util import guess_format
 from wm_store._errors import OntologyError, ValidationError
 from wm_store.ontology._literals import literal_from_value
 from wm_store.ontology._model import compile_graph
+from wm_store.ontology._teaching import parse_terms, text_digest, without_known_blank_nodes
 from wm_store.ontology._terms import (
     CLASS_NAME_RE,
     SKM,
@@ -112,7 +113,15 @@ def _default() -> Ontology:
 class Ontology(OntologyValues):
     """A loaded ontology. Build with :meth:`load` or :meth:`default`; never mutate ``graph``."""
 
-    __slots__ = ("_added_classes", "_added_templates", "_base", "_graph", "_taught", "_texts")
+    __slots__ = (
+        "_added_classes",
+        "_added_templates",
+        "_base",
+        "_digest",
+        "_graph",
+        "_taught",
+        "_texts",
+    )
 
     def __init__(
         self,
@@ -126,6 +135,7 @@ class Ontology(OntologyValues):
     ) -> None:
         self._base = graph
         self._texts = texts
+        self._digest = text_digest("\n".join(texts)) if texts else ""
         self._taught = taught
         self._added_classes = added_classes
         self._added_templates = dict(added_templates or {})
@@ -221,8 +231,6 @@ class Ontology(OntologyValues):
         result must compile as a whole, and terms already present change nothing (the result
         then equals this ontology, see :meth:`same_terms`). ``source`` names the terms in
         errors. Raises OntologyError."""
-        from wm_store.ontology._teaching import parse_terms, without_known_blank_nodes
-
         parsed = parse_terms(terms, source) if isinstance(terms, str) else terms
         parsed = without_known_blank_nodes(parsed + Graph(), self._base)
         base = Graph()
@@ -271,9 +279,7 @@ class Ontology(OntologyValues):
     def digest(self) -> str:
         """SHA-256 of the texts this ontology was loaded from ("" for one built by
         :meth:`extend` or :meth:`teach`): equal digests mean the same core."""
-        from wm_store.ontology._teaching import text_digest
-
-        return text_digest("\n".join(self._texts)) if self._texts else ""
+        return self._digest
 
     def core_turtle(self) -> str:
         """The Turtle this ontology was loaded from (its one file's text, or the files'
