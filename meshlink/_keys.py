@@ -153,6 +153,19 @@ class KeySpace:
         """Every device endpoint (``devices/**``)."""
         return f"{self.prefix}/devices/**"
 
+    def devices_state(self) -> str:
+        """The state publications of every device (``devices/*/*/state``)."""
+        return f"{self.prefix}/devices/*/*/state"
+
+    def device_of_state_key(self, key: str) -> tuple[str, str]:
+        """(robot, device) of a key built by :meth:`device_state`; InvalidKeyError if it is
+        none."""
+        head = f"{self.prefix}/devices/"
+        parts = key.removeprefix(head).split("/")
+        if not key.startswith(head) or len(parts) != 3 or parts[2] != "state":
+            raise InvalidKeyError(f"{key!r} is not a device state key of the form {head}R/D/state")
+        return check_name(parts[0], "robot name"), check_name(parts[1], "device name")
+
     def _device(self, robot: str, device: str) -> str:
         robot = check_name(robot, "robot name")
         return f"{self.prefix}/devices/{robot}/{check_name(device, 'device name')}"
@@ -169,3 +182,12 @@ class KeySpace:
     def task_events(self, task: str) -> str:
         """Event stream of one task."""
         return f"{self.prefix}/tasks/{check_name(task, 'task id')}/events"
+
+    def tasks_events(self) -> str:
+        """The event streams of every task (``tasks/*/events``)."""
+        return f"{self.prefix}/tasks/*/events"
+
+    # ---------------------------------------------------------------- site event log
+    def eventlog_rpc(self) -> str:
+        """Queryable of the site event log (read-only queries)."""
+        return f"{self.prefix}/eventlog/rpc"
