@@ -73,6 +73,23 @@ class KeySpace:
         can let readers in without letting them write."""
         return f"{self.prefix}/wm/query"
 
+    def wm_write(self, writer: str) -> str:
+        """Queryable of the WM store for the transactions of one writer: the store takes
+        ``writer`` as the transaction's author, and a router ACL lets each identity query
+        only its own (``wm/write/<writer>``)."""
+        return f"{self.prefix}/wm/write/{check_name(writer, 'writer')}"
+
+    def wm_writes(self) -> str:
+        """Every writer's transaction queryable (``wm/write/*``), served by the store."""
+        return f"{self.prefix}/wm/write/*"
+
+    def writer_of_write_key(self, key: str) -> str:
+        """The writer in a key built by :meth:`wm_write`; InvalidKeyError if it is none."""
+        head = f"{self.prefix}/wm/write/"
+        if not key.startswith(head):
+            raise InvalidKeyError(f"{key!r} is not a write key of the form {head}<writer>")
+        return check_name(key[len(head) :], "writer")
+
     def wm_changes(self) -> str:
         """Publication of committed WM transactions."""
         return f"{self.prefix}/wm/changes"

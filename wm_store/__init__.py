@@ -39,6 +39,7 @@ from ._errors import CorruptLogError as CorruptLogError
 from ._errors import DuplicateIdError as DuplicateIdError
 from ._errors import DuplicateLabelError as DuplicateLabelError
 from ._errors import ElementNotFoundError as ElementNotFoundError
+from ._errors import ForbiddenError as ForbiddenError
 from ._errors import HistoryCompactedError as HistoryCompactedError
 from ._errors import NameConflictError as NameConflictError
 from ._errors import OntologyError as OntologyError
@@ -77,6 +78,7 @@ __all__ = [
     "DuplicateIdError",
     "DuplicateLabelError",
     "ElementNotFoundError",
+    "ForbiddenError",
     "HistoryCompactedError",
     "InMemoryTransport",
     "NameConflictError",

@@ -19,6 +19,7 @@ Hierarchy::
     │   ├── NameConflictError          a name that would be one element's id and another's label
     │   ├── DuplicateLabelError        a label another element of its kind has already
     │   ├── ConflictError              compare-and-set failed: the element or store moved on
+    │   ├── ForbiddenError             an agent's write to another agent's registered elements
     │   └── QueryLimitError            a SPARQL query over a limit: text size, time, rows, queue
     ├── ProtocolError                  bytes that do not decode to a request/reply of this schema,
     │                                  or a request over the size limit
@@ -57,6 +58,7 @@ __all__ = [
     "DuplicateIdError",
     "DuplicateLabelError",
     "ElementNotFoundError",
+    "ForbiddenError",
     "HistoryCompactedError",
     "NameConflictError",
     "OntologyError",
@@ -155,6 +157,13 @@ class QueryLimitError(ValidationError):
     code = "query_limit"
 
 
+class ForbiddenError(ValidationError):
+    """A skill agent's transaction would change what another agent registered: its Agent or
+    Skill elements, the robot it controls or that robot's devices (the message names both)."""
+
+    code = "forbidden"
+
+
 class ProtocolError(WmError):
     code = "protocol_error"
 
@@ -211,6 +220,7 @@ _BY_CODE = errors_by_code(
     NameConflictError,
     DuplicateLabelError,
     ConflictError,
+    ForbiddenError,
     QueryLimitError,
     ProtocolError,
     HistoryCompactedError,

@@ -1,5 +1,6 @@
 """The Zenoh adapter of the client: :class:`ZenohTransport` talks to ``skimesh wm`` over a
-meshlink :class:`~meshlink.Mesh`: transactions on ``wm/rpc``, every read on the read-only
+meshlink :class:`~meshlink.Mesh`: transactions on ``wm/write/<author>`` (on ``wm/rpc`` when
+they name no author, or one that is no key segment), every read on the read-only
 ``wm/query``, changes from ``wm/changes``.
 
 It raises :class:`~wm_store.TransportError` when the store cannot be reached and returns an
@@ -12,7 +13,7 @@ import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-from meshlink import Mesh, MeshlinkError, NoReplyError
+from meshlink import InvalidKeyError, Mesh, MeshlinkError, NoReplyError
 from meshlink import RemoteError as MeshRemoteError
 from meshlink.rpc import WireError, encode
 from wm_store._errors import ProtocolError, TransportError
@@ -30,8 +31,7 @@ class ZenohTransport:
         self.mesh = mesh
 
     async def request(self, request: Request, *, timeout: float) -> Reply:
-        keys = self.mesh.keys
-        key = keys.wm_rpc() if isinstance(request, Transact) else keys.wm_query()
+        key = self._key(request)
         try:
             data = await self.mesh.request(key, encode(request), timeout=timeout)
         except MeshRemoteError as exc:
@@ -47,6 +47,15 @@ class ZenohTransport:
             return decode_reply(data)
         except WireError as exc:
             raise ProtocolError(f"undecodable reply from the store: {exc}") from exc
+
+    def _key(self, request: Request) -> str:
+        keys = self.mesh.keys
+        if not isinstance(request, Transact):
+            return keys.wm_query()
+        try:
+            return keys.wm_write(request.author) if request.author else keys.wm_rpc()
+        except InvalidKeyError:
+            return keys.wm_rpc()
 
     @asynccontextmanager
     async def changes(self) -> AsyncIterator[AsyncIterator[Change]]:

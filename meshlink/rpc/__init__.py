@@ -22,7 +22,7 @@ from ._client import (
     from_message,
     raise_for_error,
 )
-from ._server import ErrorMapper, RequestHandler, coded_errors
+from ._server import MSGPACK, ErrorMapper, RequestHandler, coded_errors
 from ._wire import (
     BAD_REQUEST,
     DEFAULT_MAX_REQUEST_BYTES,
@@ -39,6 +39,7 @@ __all__ = [
     "BAD_REQUEST",
     "DEFAULT_MAX_REQUEST_BYTES",
     "INTERNAL",
+    "MSGPACK",
     "TOO_LARGE",
     "UNAVAILABLE",
     "Decoder",

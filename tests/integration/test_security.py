@@ -40,8 +40,8 @@ from meshlink.rpc import encode
 from meshlink.testing import free_port
 from skill_agent import AgentTransportError
 from skill_agent.client import AgentClient, find_skills, list_agents
-from wm_store import TransportError, WmClient, ZenohTransport
-from wm_store.protocol import AddElement, Transact
+from wm_store import ForbiddenError, RobotRegistration, TransportError, WmClient, ZenohTransport
+from wm_store.protocol import AddElement, RemoveElement, Transact, UnsetRelation, UpdateElement
 
 from .procs import ROOT, Child
 
@@ -49,7 +49,7 @@ pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.anyio]
 
 CONFIGS = ROOT / "configs" / "zenoh"
 MAKE_CERTS = ROOT / "scripts" / "make-test-certs"
-USERS = ("wm", "agent-r1", "operator", "viewer")
+USERS = ("wm", "agent-r1", "agent-r2", "operator", "viewer")
 NOOP = ROOT / "docs" / "examples" / "noop.py"
 
 
@@ -159,6 +159,7 @@ def digest(wm: WmClient) -> str:
     snap = wm.replica.state.to_snapshot()
     snap.elements.sort(key=lambda e: e.id)
     snap.relations.sort(key=lambda r: (r.subject, r.predicate, r.object))
+    snap.counters = dict(sorted(snap.counters.items()))  # their order carries no meaning
     return hashlib.sha256(msgspec.msgpack.encode(snap)).hexdigest()
 
 
@@ -228,6 +229,37 @@ async def test_the_writer_commits_and_the_read_only_user_changes_nothing(acl_sit
             assert sample.key == viewer.keys.wm_changes()
         tg.cancel_scope.cancel()
     assert served == [], "the viewer's impostor queryable received queries"
+
+
+async def test_a_robot_agent_cannot_rewrite_or_unregister_another_robot(acl_site: AclSite) -> None:
+    """Logged in as agent-r2: it registers itself, but the store refuses (by its identity,
+    which the ACL fixes to the key it writes on) every change to r1's registration, it cannot
+    write as r1 (wm/write/r1 is r1's) nor through wm/rpc, and nothing changes."""
+    site = acl_site
+    reg = RobotRegistration(agent="r2", robot_type="Robot", robot_label="r2")
+    async with (
+        site.session("agent-r2") as mesh,
+        WmClient.connect(ZenohTransport(mesh), author="r2", timeout=2.0) as wm,
+    ):
+        await wm.register_robot(reg)
+        (agent_r1,) = [e for e in wm.resolve_element(label="r1") if e.type == "RobotAgent"]
+        (robot_r1,) = [e for e in wm.resolve_element(label="r1") if e.type == "Robot"]
+        before = await store_state(site)
+        for ops in (
+            [UpdateElement(id=robot_r1.id, properties={"available": False})],
+            [RemoveElement(id=agent_r1.id)],
+            [UnsetRelation(subject=agent_r1.id, predicate="controls", object=robot_r1.id)],
+        ):
+            with pytest.raises(ForbiddenError, match=r"'r2' may not .* agent r1"):
+                await wm.transact(ops)
+        raw = encode(Transact(ops=[RemoveElement(id=agent_r1.id)], author="r1"))
+        with pytest.raises(NoReplyError, match="ACL"):  # writing as r1: not its key
+            await mesh.request(mesh.keys.wm_write("r1"), raw, timeout=1.0)
+        with pytest.raises(NoReplyError, match="ACL"):  # the general write key: not for agents
+            await mesh.request(mesh.keys.wm_rpc(), raw, timeout=1.0)
+        assert await store_state(site) == before
+        assert "r1" in await list_agents(mesh)
+        await wm.unregister_robot("r2")  # its own: allowed (and the other tests see r1 alone)
 
 
 async def test_the_read_only_user_cannot_start_a_skill(acl_site: AclSite) -> None:

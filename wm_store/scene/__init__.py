@@ -10,9 +10,15 @@ state) and the client (its replica), so both index and answer the same way.
   avoid labels; its ``display_name`` is public as :func:`wm_store.display_name`).
 - :func:`merge_observation` / :func:`resolve_observations`: multi-source property resolution.
 - :func:`min_cardinality_violations`: the minimum-cardinality report (``CheckCardinality``).
+- :func:`ownership` / :func:`check_writer`: what each agent registered, and the store's refusal
+  of an agent's write to another agent's elements (:class:`Ownership`, :data:`STRUCTURE`).
 """
 
 from ._cardinality import min_cardinality_violations as min_cardinality_violations
+from ._ownership import STRUCTURE as STRUCTURE
+from ._ownership import Ownership as Ownership
+from ._ownership import check_writer as check_writer
+from ._ownership import ownership as ownership
 from ._query import id_sort_key as id_sort_key
 from ._query import match_relations as match_relations
 from ._query import resolve as resolve
@@ -28,15 +34,19 @@ from ._transactions import apply_transaction as apply_transaction
 
 __all__ = [
     "SELF",
+    "STRUCTURE",
+    "Ownership",
     "ResolutionPolicy",
     "SceneState",
     "TxnResult",
     "Undo",
     "apply_transaction",
+    "check_writer",
     "id_sort_key",
     "match_relations",
     "merge_observation",
     "min_cardinality_violations",
+    "ownership",
     "parse_id",
     "resolve",
     "resolve_observations",

@@ -20,7 +20,7 @@ as before. Rules enforced here:
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 
 import msgspec
@@ -83,12 +83,15 @@ def apply_transaction(
     revision: int,
     now: float | None = None,
     parsed_terms: Mapping[int, Graph] | None = None,
+    check: Callable[[list[Delta]], None] | None = None,
 ) -> TxnResult:
     """Apply ``ops`` to ``state`` as revision ``revision``; all or nothing.
 
     ``parsed_terms``: the Turtle of :class:`DefineTerms` ops already parsed (by op index), so
-    a caller can parse off its event loop. Raises a :class:`~wm_store.WmError` subclass naming
-    the op (by index) and the problem; the state is then unchanged.
+    a caller can parse off its event loop. ``check``: called with the deltas once every op
+    applied; what it raises undoes them (the store's authorization). Raises a
+    :class:`~wm_store.WmError` subclass naming the op (by index) and the problem; the state is
+    then unchanged.
     """
     txn = _Txn(state, ontology, revision, time.time() if now is None else now)
     txn.parsed_terms = parsed_terms or {}
@@ -100,6 +103,8 @@ def apply_transaction(
                 txn.apply(index, op)
             except ValidationError as exc:
                 raise type(exc)(f"op #{index} ({type(op).__name__}): {exc}") from exc
+        if check is not None:
+            check(txn.deltas)
     except BaseException:
         for record in reversed(txn.undo):
             state.undo(record)

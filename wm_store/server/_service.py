@@ -22,8 +22,10 @@ import msgspec
 from meshlink.rpc import (
     BAD_REQUEST,
     DEFAULT_MAX_REQUEST_BYTES,
+    INTERNAL,
     ErrorReply,
     RequestHandler,
+    WireError,
     encode,
 )
 from wm_store._errors import ElementNotFoundError, ProtocolError, WmError
@@ -110,6 +112,29 @@ class WmService:
         except (ValueError, TypeError, KeyError) as exc:
             _log.warning("request %s refused: %s", type(request).__name__, exc)
             return ErrorReply(code=BAD_REQUEST, message=f"{type(exc).__name__}: {exc}")
+
+    async def handle_write(self, data: bytes, writer: str) -> tuple[bytes, bool]:
+        """Answer one request of ``wm/write/<writer>``: a transaction, committed with
+        ``writer`` as its author whatever it claims (under the router's ACL only ``writer``
+        can query that key, so the author is its identity). Returns ``(reply bytes, ok)``."""
+        reply: Reply
+        try:
+            request = self.rpc.decoder.decode(data)
+        except WireError as exc:
+            reply = ErrorReply(code=exc.code, message=str(exc))
+        else:
+            if isinstance(request, Transact):
+                try:
+                    reply = await self.handle(msgspec.structs.replace(request, author=writer))
+                except Exception as exc:  # as the RPC layer does: answered, logged
+                    _log.exception("wm/write/%s: the transaction failed", writer)
+                    reply = ErrorReply(code=INTERNAL, message=f"{type(exc).__name__}: {exc}")
+            else:
+                reply = ErrorReply(
+                    code=ProtocolError.code,
+                    message=f"wm/write/{writer} takes transactions only: send reads to wm/query",
+                )
+        return encode(reply), not isinstance(reply, ErrorReply)
 
     async def _handle_read(self, request: Request) -> Reply:
         if isinstance(request, Transact):

@@ -33,9 +33,11 @@ from wm_store._errors import ConflictError, HistoryCompactedError, StorageError,
 from wm_store.durability import Durability
 from wm_store.ontology import Ontology, parse_terms, replay
 from wm_store.protocol import (
+    AddElement,
     Change,
     ChangesReply,
     DefineTerms,
+    Delta,
     InfoReply,
     OntologyReply,
     Op,
@@ -44,7 +46,7 @@ from wm_store.protocol import (
     Transact,
     TransactReply,
 )
-from wm_store.scene import SceneState, Undo, apply_transaction
+from wm_store.scene import SceneState, Undo, apply_transaction, check_writer, ownership
 
 __all__ = ["ChangeListener", "StoreConfig", "WmStore"]
 
@@ -70,6 +72,10 @@ class StoreConfig(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_on
     """Largest number of ops one transaction may carry."""
     dedupe: Annotated[int, Meta(ge=0)] = 10_000
     """How many recent transaction ids are remembered for idempotent retries."""
+    controllers: dict[str, list[str]] = {}
+    """Robot (or appliance) label -> the agents that may control it. An agent may join a robot
+    another agent controls (a split robot) only if it is named here for that robot; a robot
+    not named here may be joined by any agent (see ``wm_store.scene.check_writer``)."""
 
 
 def chain_digest(previous: str, deltas: bytes) -> str:
@@ -214,7 +220,13 @@ class WmStore:
         revision = self.state.revision + 1
         now = time.time()
         result = apply_transaction(
-            self.state, self.ontology, request.ops, revision=revision, now=now, parsed_terms=parsed
+            self.state,
+            self.ontology,
+            request.ops,
+            revision=revision,
+            now=now,
+            parsed_terms=parsed,
+            check=self._authorization(request),
         )
         if not result.deltas:  # nothing changed (e.g. terms the ontology already has)
             return TransactReply(revision=self.state.revision, ids=result.ids)
@@ -245,6 +257,26 @@ class WmStore:
         self._publish_ready()
         await self._wait_published(revision)
         return reply
+
+    def _authorization(self, request: Transact) -> Callable[[list[Delta]], None] | None:
+        """The check that refuses an agent's write to what another agent registered, made
+        from the state before the transaction; None when the author cannot be an agent (no
+        element has its label and the transaction adds none with it)."""
+        author, state = request.author, self.state
+        if not author or not (
+            state.ids_with_label(author)
+            or any(isinstance(op, AddElement) and op.label == author for op in request.ops)
+        ):
+            return None
+        onto = self.ontology
+        agent_types = onto.subclasses("Agent")
+        before = ownership(state, agent_types, onto.subclasses("Device"))
+        controllers = self.config.controllers
+
+        def check(deltas: list[Delta]) -> None:
+            check_writer(before, deltas, author, agent_types=agent_types, controllers=controllers)
+
+        return check
 
     def _remember(self, entry: _Entry, reply: TransactReply | None = None) -> None:
         self._history.append(entry)

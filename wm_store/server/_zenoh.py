@@ -7,6 +7,9 @@ only parts of ``wm_store`` that talk to the network. It serves:
   is sent as a Zenoh error reply carrying a :class:`meshlink.rpc.ErrorReply`;
 - ``wm/query``: the same for every request but transactions (read-only), so a router ACL can
   let read-only users read the world model without letting them write;
+- ``wm/write/<writer>``: transactions of one writer, committed with ``<writer>`` as their
+  author (a router ACL lets each identity query only its own key, so the store decides what an
+  agent may change by who it is: ``wm_store.scene.check_writer``);
 - ``wm/elements/<id>``: storage-style reads, each element as JSON, so any Zenoh tool
   (``z_get -s 'skimesh/default/wm/elements/**'``) can read the world model;
 - ``wm/changes``: one publication per durable change, congestion control BLOCK (a dropped
@@ -22,7 +25,8 @@ import anyio
 import msgspec
 from anyio.abc import TaskStatus
 
-from meshlink import Answer, IncomingQuery, Mesh, intersects
+from meshlink import Answer, IncomingQuery, InvalidKeyError, Mesh, intersects
+from meshlink.rpc import BAD_REQUEST, MSGPACK, ErrorReply, encode
 from wm_store.protocol import Change
 from wm_store.server._presence import PresenceMonitor
 from wm_store.server._service import WmService
@@ -54,6 +58,15 @@ async def serve_store(
     async def elements(query: IncomingQuery) -> list[Answer]:
         return _element_answers(store, keys.wm_element, query.key_expr)
 
+    async def writes(query: IncomingQuery) -> list[Answer]:
+        try:
+            writer = keys.writer_of_write_key(query.key_expr)
+        except InvalidKeyError as e:
+            refused = ErrorReply(code=BAD_REQUEST, message=f"{e}: name one writer")
+            return [Answer(key=query.key_expr, payload=encode(refused), ok=False)]
+        data, ok = await service.handle_write(query.payload or b"", writer)
+        return [Answer(key=keys.wm_write(writer), payload=data, ok=ok, encoding=MSGPACK)]
+
     try:
         with mesh.publisher(keys.wm_changes()) as publisher:
 
@@ -65,6 +78,7 @@ async def serve_store(
                 await tg.start(store.run)
                 await tg.start(mesh.serve, rpc_key, service.rpc.serve_on(rpc_key))
                 await tg.start(mesh.serve, read_key, service.query.serve_on(read_key))
+                await tg.start(mesh.serve, keys.wm_writes(), writes)
                 await tg.start(mesh.serve, keys.wm_elements(), elements)
                 if presence:
                     await tg.start(PresenceMonitor(mesh, store).run)
