@@ -57,9 +57,9 @@ class RunHistory:
             self._ended.append(event.run_id)
             while len(self._ended) > self.max_runs:
                 self._runs.pop(self._ended.popleft(), None)
-            return
-        kept.events.append(event)
-        while len(kept.events) + (kept.result is not None) > self.max_events:
+        else:
+            kept.events.append(event)
+        while kept.events and len(kept.events) + (kept.result is not None) > self.max_events:
             kept.events.popleft()
             kept.dropped += 1
 
