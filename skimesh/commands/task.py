@@ -210,7 +210,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     pause.add_argument("task_id", metavar="TASK_ID", help="the task to hold")
     pause.add_argument("--reason", default="paused from the command line", help="why")
     _client_arguments(pause)
-    pause.set_defaults(func=lambda a: _client(a, _pause))
+    pause.set_defaults(func=lambda a: _client(a, _hold))
 
     resume = cmds.add_parser(
         "resume",
@@ -220,7 +220,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     )
     resume.add_argument("task_id", metavar="TASK_ID", help="the task to release")
     _client_arguments(resume)
-    resume.set_defaults(func=lambda a: _client(a, _resume))
+    resume.set_defaults(func=lambda a: _client(a, _hold))
 
     watch = cmds.add_parser(
         "watch",
@@ -456,16 +456,14 @@ async def _abort(args: argparse.Namespace) -> int:
     return 0
 
 
-async def _pause(args: argparse.Namespace) -> int:
+async def _hold(args: argparse.Namespace) -> int:
+    """``task pause`` / ``task resume``: the service's answer."""
     async with mesh_session(args) as mesh:
-        message = await TaskClient(mesh, timeout=args.timeout).pause(args.task_id, args.reason)
-    print_json({"task_id": args.task_id, "reply": message}) if args.json else print(message)
-    return 0
-
-
-async def _resume(args: argparse.Namespace) -> int:
-    async with mesh_session(args) as mesh:
-        message = await TaskClient(mesh, timeout=args.timeout).resume(args.task_id)
+        client = TaskClient(mesh, timeout=args.timeout)
+        if args.task_command == "pause":
+            message = await client.pause(args.task_id, args.reason)
+        else:
+            message = await client.resume(args.task_id)
     print_json({"task_id": args.task_id, "reply": message}) if args.json else print(message)
     return 0
 

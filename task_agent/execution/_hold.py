@@ -12,6 +12,7 @@ refuses, is logged and skipped: pausing is best effort per run, holding new step
 from __future__ import annotations
 
 import logging
+from collections.abc import Awaitable, Callable
 
 import anyio
 
@@ -72,10 +73,7 @@ class Hold:
         """Pause one run on its agent (if the task is still held and the run still runs)."""
         if not self.held or run_id not in self._runs or run_id in self._paused:
             return False
-        try:
-            await self.runner.pause(agent, run_id)
-        except SkillError as e:
-            _log.info("task %s: could not pause run %s on %s: %s", self.task_id, run_id, agent, e)
+        if not await self._ask(self.runner.pause, agent, run_id):
             return False
         if run_id not in self._runs:  # ended while the request was out
             return False
@@ -100,9 +98,18 @@ class Hold:
 
     async def _resume_run(self, agent: str, run_id: str) -> bool:
         self._paused.pop(run_id, None)
+        return await self._ask(self.runner.resume, agent, run_id)
+
+    async def _ask(
+        self, call: Callable[[str, str], Awaitable[None]], agent: str, run_id: str
+    ) -> bool:
+        """``call(agent, run_id)``; False (logged) if the agent refused or is gone."""
         try:
-            await self.runner.resume(agent, run_id)
+            await call(agent, run_id)
         except SkillError as e:
-            _log.info("task %s: could not resume run %s on %s: %s", self.task_id, run_id, agent, e)
+            what = call.__name__
+            _log.info(
+                "task %s: could not %s run %s on %s: %s", self.task_id, what, run_id, agent, e
+            )
             return False
         return True
