@@ -434,7 +434,8 @@ async def _list(args: argparse.Namespace) -> int:
     if args.json:
         print_json(tasks)
     for info in [] if args.json else tasks:
-        print(f"{info.task_id:<14} {info.outcome:<10} {info.replans} replans  "
+        state = f"{info.outcome} (paused)" if info.paused else info.outcome
+        print(f"{info.task_id:<14} {state:<10} {info.replans} replans  "
               f"{info.goal or info.name}")  # fmt: skip
     return 0
 
