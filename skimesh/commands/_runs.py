@@ -17,6 +17,7 @@ from collections.abc import Awaitable, Callable, Sequence
 import msgspec
 
 from meshlink import Mesh
+from skill_agent import SkillError
 from skill_agent.client import AgentClient, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunInfo, RunResult
 
@@ -192,6 +193,12 @@ async def _runs(
     names = [agent] if agent else sorted(await list_agents(mesh, timeout=timeout))
     found: list[tuple[str, RunInfo]] = []
     for name in names:
-        runs = await AgentClient(mesh, name, timeout=timeout).runs(active_only=active)
+        try:
+            runs = await AgentClient(mesh, name, timeout=timeout).runs(active_only=active)
+        except SkillError as e:
+            if agent:
+                raise
+            print(f"warning: agent {name}: {e}", file=sys.stderr)  # the others still answer
+            continue
         found += [(name, info) for info in runs]
     return sorted(found, key=lambda f: f[1].started_at)
