@@ -63,11 +63,7 @@ class Hold:
         if self.held:
             return []
         self.reason, self._released = reason, anyio.Event()
-        paused = []
-        for run_id, agent in list(self._runs.items()):
-            if await self.pause_run(agent, run_id):
-                paused.append(f"{agent}/{run_id}")
-        return paused
+        return await _each(self._runs, self.pause_run)
 
     async def pause_run(self, agent: str, run_id: str) -> bool:
         """Pause one run on its agent (if the task is still held and the run still runs)."""
@@ -90,11 +86,7 @@ class Hold:
             return []
         self.reason = ""
         self._released.set()
-        resumed = []
-        for run_id, agent in list(self._paused.items()):
-            if await self._resume_run(agent, run_id):
-                resumed.append(f"{agent}/{run_id}")
-        return resumed
+        return await _each(self._paused, self._resume_run)
 
     async def _resume_run(self, agent: str, run_id: str) -> bool:
         self._paused.pop(run_id, None)
@@ -113,3 +105,9 @@ class Hold:
             )
             return False
         return True
+
+
+async def _each(runs: dict[str, str], act: Callable[[str, str], Awaitable[bool]]) -> list[str]:
+    """``act(agent, run_id)`` for each of ``runs`` (run id -> agent); the runs it acted on,
+    as ``agent/run``."""
+    return [f"{agent}/{run_id}" for run_id, agent in list(runs.items()) if await act(agent, run_id)]
