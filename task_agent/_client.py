@@ -7,9 +7,16 @@ One call submits a goal and follows it to the end::
 
 It never waits forever (SkiROS2 #79): :meth:`TaskClient.watch` subscribes to the task's events
 *before* the task is submitted (the client chooses the task id), asks the service for the
-task's status whenever the stream stays quiet for ``quiet`` seconds (a ``TaskFinished`` missed
-during a reconnect is rebuilt from the status), raises :class:`TaskTransportError` when the
-service does not answer for ``lost_after`` seconds, and ``TimeoutError`` after ``deadline``.
+events it has not seen whenever the stream stays quiet for ``quiet`` seconds or skips a
+``seq`` (``TaskHistory``: events missed during a reconnect are fetched, not lost), raises
+:class:`TaskTransportError` when the service does not answer for ``lost_after`` seconds, and
+``TimeoutError`` after ``deadline``.
+
+Watching a task that runs already (or has ended) starts with its **history**: the client
+subscribes, then fetches the events kept so far by ``seq`` (from ``TaskStarted``, the plan and
+every step), yields them, then the live ones, each ``seq`` once (:class:`SeqMerge`). A task
+agent without ``TaskHistory`` is followed from its status as before (a ``TaskFinished``
+rebuilt from the status when the task ended).
 
 Errors: an error reply raises the :mod:`task_agent` class of its code
 (``GoalParseError``, ``VerificationError``, ...; codes the package has no class for raise
@@ -30,11 +37,12 @@ from typing import TypeVar
 import anyio
 
 from meshlink import KeySpace, Mesh, MeshlinkError, NoReplyError, RemoteError, Sample, Subscription
-from meshlink.rpc import ErrorReply, WireError, encode, error_for
+from meshlink.rpc import BAD_REQUEST, ErrorReply, WireError, encode, error_for
 
 from ._errors import (
     TASK_CODES,
     FileRefusedError,
+    RemoteTaskError,
     TaskTransportError,
     remote_task_error,
 )
@@ -42,18 +50,22 @@ from ._goals import Goal
 from .protocol import (
     AbortTask,
     AnswerPending,
+    HistoryReply,
     ListPending,
     ListTasks,
     OkReply,
     OperatorRequest,
+    PauseTask,
     PendingReply,
     PendingStep,
+    ResumeTask,
     SeenAt,
     SubmitFile,
     SubmitGoal,
     TaskAccepted,
     TaskEvent,
     TaskFinished,
+    TaskHistory,
     TaskInfo,
     TaskOptions,
     TaskReply,
@@ -70,6 +82,7 @@ from .protocol import (
 __all__ = [
     "EventCallback",
     "OperatorClient",
+    "SeqMerge",
     "TaskClient",
     "new_task_id",
     "operator_rpc_key",
@@ -95,6 +108,24 @@ def _remote_error(payload: bytes) -> Exception:
     return error_for(payload, TASK_CODES, fallback=remote_task_error)
 
 
+class SeqMerge:
+    """Each event of a task once, in ``seq`` order, from the history and the live stream
+    together: :meth:`take` says whether an event is new (``seq`` above every one taken), and
+    :meth:`gap` whether events lie between the last one taken and ``seq``."""
+
+    def __init__(self) -> None:
+        self.last_seq = 0
+
+    def take(self, event: TaskEvent) -> bool:
+        if event.seq <= self.last_seq:
+            return False
+        self.last_seq = event.seq
+        return True
+
+    def gap(self, seq: int) -> bool:
+        return seq > self.last_seq + 1
+
+
 class TaskClient:
     """Typed calls to the task agent (``tasks/rpc``) and its event streams."""
 
@@ -107,6 +138,8 @@ class TaskClient:
         """Seconds without an event after which the task's status is asked for."""
         self.lost_after = lost_after
         """Seconds the service may stay silent (while a task is watched) before giving up."""
+        self._has_history = True
+        """The task agent answers ``TaskHistory`` (False once it refused it)."""
 
     # ------------------------------------------------------------------ requests
 
@@ -165,6 +198,32 @@ class TaskClient:
     async def list(self, *, active_only: bool = False) -> list[TaskInfo]:
         return (await self._expect(ListTasks(active_only=active_only), TasksReply)).tasks
 
+    async def history(self, task_id: str, after_seq: int = 0) -> HistoryReply:
+        """The task's kept events with ``seq > after_seq`` (every page of them), oldest first;
+        the last reply's ``outcome``, ``dropped`` and ``more=False``."""
+        events: Sequence[TaskEvent] = ()
+        while True:
+            request = TaskHistory(task_id=task_id, after_seq=after_seq)
+            reply = await self._expect(request, HistoryReply)
+            events = [*events, *reply.events]
+            if not reply.more or not reply.events:
+                return HistoryReply(
+                    task_id=task_id,
+                    events=[*events],
+                    outcome=reply.outcome,
+                    dropped=reply.dropped,
+                )
+            after_seq = reply.events[-1].seq
+
+    async def pause(self, task_id: str, reason: str = "") -> str:
+        """Hold a task: no new step starts, its runs are paused on their agents. Returns the
+        service's message (RequestError ``task_ended`` if the task has ended)."""
+        return (await self._expect(PauseTask(task_id=task_id, reason=reason), OkReply)).message
+
+    async def resume(self, task_id: str) -> str:
+        """Release a held task; returns the service's message."""
+        return (await self._expect(ResumeTask(task_id=task_id), OkReply)).message
+
     async def abort(self, task_id: str, reason: str = "") -> str:
         """Abort a task; returns once it ended (every run stopped) or the service's wait
         ran out. Returns the service's message."""
@@ -193,15 +252,16 @@ class TaskClient:
     ) -> AsyncGenerator[TaskEvent, None]:
         # No cancel scope may span a ``yield`` (the consumer's code runs there): the deadline
         # is checked around each wait instead.
-        last_seq, silent_since = 0, anyio.current_time()
+        merge, silent_since = SeqMerge(), anyio.current_time()
         end = anyio.current_time() + deadline
-        check = existing
+        check, self._has_history = existing, True
         while True:
             if check:
-                finished = await self._finished_by_status(task_id, last_seq, silent_since)
-                if finished is not None:
-                    yield finished
-                    return
+                for event in await self._backlog(task_id, merge.last_seq, silent_since):
+                    if merge.take(event):
+                        yield event
+                        if isinstance(event, TaskFinished):
+                            return
             left = end - anyio.current_time()
             if left <= 0:
                 raise TimeoutError(f"task {task_id} did not finish within {deadline:g} s")
@@ -220,12 +280,44 @@ class TaskClient:
                 _log.warning("undecodable event of task %s: %s", task_id, e)
                 continue
             silent_since = anyio.current_time()
-            if event.seq != last_seq + 1:
-                _log.warning("task %s: events %d..%d missed", task_id, last_seq + 1, event.seq - 1)
-            last_seq = event.seq
+            if merge.gap(event.seq) and self._has_history:  # fetch what the stream skipped
+                for missed in await self._backlog(task_id, merge.last_seq, silent_since):
+                    if missed.seq < event.seq and merge.take(missed):
+                        yield missed
+            if merge.gap(event.seq):
+                _log.warning(
+                    "task %s: events %d..%d missed", task_id, merge.last_seq + 1, event.seq - 1
+                )
+            if not merge.take(event):
+                continue  # had it from the history
             yield event
             if isinstance(event, TaskFinished):
                 return
+
+    async def _backlog(
+        self, task_id: str, last_seq: int, silent_since: float
+    ) -> Sequence[TaskEvent]:
+        """The events after ``last_seq`` the service kept (from its status, a rebuilt
+        ``TaskFinished`` once ended, if it keeps none); [] while it does not answer."""
+        if self._has_history:
+            try:
+                return (await self.history(task_id, last_seq)).events
+            except RemoteTaskError as e:
+                if e.code != BAD_REQUEST:  # an older task agent: no TaskHistory
+                    raise
+                self._has_history = False
+            except TaskTransportError:
+                self._check_lost(task_id, silent_since)
+                return []
+        finished = await self._finished_by_status(task_id, last_seq, silent_since)
+        return [] if finished is None else [finished]
+
+    def _check_lost(self, task_id: str, silent_since: float) -> None:
+        if anyio.current_time() - silent_since > self.lost_after:
+            raise TaskTransportError(
+                f"the task agent stopped answering for {self.lost_after:g} s while task "
+                f"{task_id} was running"
+            ) from None
 
     async def _finished_by_status(
         self, task_id: str, last_seq: int, silent_since: float
@@ -233,11 +325,7 @@ class TaskClient:
         try:
             info = await self.status(task_id)
         except TaskTransportError:
-            if anyio.current_time() - silent_since > self.lost_after:
-                raise TaskTransportError(
-                    f"the task agent stopped answering for {self.lost_after:g} s while task "
-                    f"{task_id} was running"
-                ) from None
+            self._check_lost(task_id, silent_since)
             return None
         if info.outcome == "running":
             return None

@@ -4,7 +4,8 @@ Key space (prefix ``skimesh/<mesh>``):
 
 - ``tasks/rpc``            queryable: one :data:`TaskRequest` -> one :data:`TaskReply`
 - ``tasks/<task>/events``  publication: :data:`TaskEvent`, from ``TaskStarted`` to one
-  ``TaskFinished``
+  ``TaskFinished``; the events so far are also kept by the task agent (``TaskHistory``), so a
+  watcher that comes late fetches them by ``seq`` before following the stream
 - ``operator/rpc``         queryable of the operator agent's pending requests (semi-autonomy)
 
 A task is either a **goal** (world-model facts, planned by the task agent) or a **task file**
@@ -30,17 +31,20 @@ __all__ = [
     "Call",
     "FactCheck",
     "GoalCheck",
+    "HistoryReply",
     "ListPending",
     "ListTasks",
     "OkReply",
     "OperatorReply",
     "OperatorRequest",
     "Parallel",
+    "PauseTask",
     "PendingReply",
     "PendingStep",
     "Planned",
     "PlannedStep",
     "Replanning",
+    "ResumeTask",
     "SeenAt",
     "Sequence",
     "StepFinished",
@@ -53,11 +57,14 @@ __all__ = [
     "TaskEvent",
     "TaskFile",
     "TaskFinished",
+    "TaskHistory",
     "TaskInfo",
     "TaskOptions",
     "TaskOutcome",
+    "TaskPaused",
     "TaskReply",
     "TaskRequest",
+    "TaskResumed",
     "TaskStarted",
     "TaskStatus",
     "TasksReply",
@@ -189,7 +196,38 @@ class AbortTask(Struct, tag=True, tag_field="request", frozen=True, kw_only=True
     reason: str = ""
 
 
-TaskRequest: TypeAlias = SubmitGoal | SubmitFile | VerifyFile | TaskStatus | ListTasks | AbortTask
+class TaskHistory(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """The task's kept events with ``seq > after_seq``, oldest first, at most ``limit`` per
+    reply (:class:`HistoryReply`; ask again from its last ``seq`` while ``more``)."""
+
+    task_id: str
+    after_seq: Annotated[int, Meta(ge=0)] = 0
+    limit: Annotated[int, Meta(ge=1, le=5000)] = 1000
+
+
+class PauseTask(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """Hold the task: every running run of the task is paused on its agent and no new step
+    starts until ``ResumeTask`` (``AbortTask`` still works)."""
+
+    task_id: str
+    reason: str = ""
+
+
+class ResumeTask(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    task_id: str
+
+
+TaskRequest: TypeAlias = (
+    SubmitGoal
+    | SubmitFile
+    | VerifyFile
+    | TaskStatus
+    | ListTasks
+    | AbortTask
+    | TaskHistory
+    | PauseTask
+    | ResumeTask
+)
 
 # --------------------------------------------------------------------------- events
 
@@ -331,8 +369,36 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     """A succeeded goal task: each goal fact in the world model and in the physics."""
 
 
+class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    """The task is held (``PauseTask``): no new step starts; ``runs`` were paused on their
+    agents (``agent/run``)."""
+
+    task_id: str
+    seq: int
+    stamp: float
+    reason: str = ""
+    runs: list[str] = []
+
+
+class TaskResumed(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    """The task goes on (``ResumeTask``): its paused runs were resumed."""
+
+    task_id: str
+    seq: int
+    stamp: float
+    runs: list[str] = []
+
+
 TaskEvent: TypeAlias = (
-    TaskStarted | Planned | StepStarted | StepProgress | StepFinished | Replanning | TaskFinished
+    TaskStarted
+    | Planned
+    | StepStarted
+    | StepProgress
+    | StepFinished
+    | Replanning
+    | TaskPaused
+    | TaskResumed
+    | TaskFinished
 )
 
 # --------------------------------------------------------------------------- replies
@@ -350,6 +416,8 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     message: str = ""
     check: GoalCheck | None = None
     """As in :class:`TaskFinished`, once the task has ended."""
+    paused: bool = False
+    """Held by ``PauseTask`` (no new step starts) until ``ResumeTask``."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
@@ -373,7 +441,20 @@ class OkReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
-TaskReply: TypeAlias = TaskAccepted | TasksReply | VerifyReply | OkReply | ErrorReply
+class HistoryReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    """A task's kept events (``TaskHistory``), oldest first. ``dropped``: events the task
+    agent did not keep (its bound per task: progress events go first); ``more``: events after
+    the last one here did not fit in this reply."""
+
+    task_id: str
+    events: list[TaskEvent]
+    outcome: TaskOutcome = "running"
+    dropped: int = 0
+    more: bool = False
+    schema_version: int = SCHEMA_VERSION
+
+
+TaskReply: TypeAlias = TaskAccepted | TasksReply | VerifyReply | OkReply | HistoryReply | ErrorReply
 
 # --------------------------------------------------------------------------- operator
 # ``operator/rpc``: one OperatorRequest -> one OperatorReply (errors: ErrorReply, code

@@ -21,6 +21,13 @@ Requests:
 - ``TaskStatus`` / ``ListTasks`` from the registry (the last ``keep_finished`` ended tasks are
   kept); ``AbortTask`` stops every run of the task and answers once it ended (or after
   ``abort_wait`` seconds).
+- ``TaskHistory``: the task's kept events after a ``seq`` (``HistoryReply``; each task keeps
+  at most ``max_events`` events, progress dropped first: :class:`~task_agent.execution.
+  EventHistory`), for a watcher that comes late (``skimesh task watch``).
+- ``PauseTask`` / ``ResumeTask``: hold the task (no new step starts, its runs are paused on
+  their agents) and release it (:meth:`~task_agent.execution.Executor.pause`); refused with
+  ``task_ended`` once the task has ended, answered ``OkReply`` saying so when the task is held
+  already (or not held).
 
 Refusals are error replies carrying ``ErrorReply{code, message}`` (:mod:`meshlink.rpc`, which
 decodes, dispatches and encodes): the standard ``bad_request`` (malformed bytes of any kind, a
@@ -65,6 +72,7 @@ from ._goals import Goal, check_goal
 from ._physics import NO_SIMULATOR, check_goal_facts
 from .discovery import Discovery
 from .execution import (
+    MAX_TASK_EVENTS,
     Executor,
     GoalVerifier,
     PlanSource,
@@ -77,13 +85,17 @@ from .operator import serve_operator
 from .protocol import (
     AbortTask,
     GoalCheck,
+    HistoryReply,
     ListTasks,
     OkReply,
+    PauseTask,
+    ResumeTask,
     SubmitFile,
     SubmitGoal,
     TaskAccepted,
     TaskEvent,
     TaskFinished,
+    TaskHistory,
     TaskInfo,
     TaskOptions,
     TaskReply,
@@ -163,8 +175,11 @@ class TaskService:
         writes: RunWrites | None = None,
         max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
         verify: GoalVerifier | None = None,
+        max_events: int = MAX_TASK_EVENTS,
     ) -> None:
         self.wm = wm
+        self.max_events = max_events
+        """Events kept per task (for ``TaskHistory``)."""
         self.verify = verify or functools.partial(_world_model_only, wm)
         """Checks a succeeded goal fact by fact (default: in the world model only)."""
         self.writes = writes
@@ -244,6 +259,12 @@ class TaskService:
                 return TasksReply(tasks=self.tasks(active_only=active_only))
             case AbortTask(task_id=task_id, reason=reason):
                 return await self._abort(task_id, reason)
+            case TaskHistory(task_id=task_id, after_seq=after, limit=limit):
+                return self._history(task_id, after, limit)
+            case PauseTask(task_id=task_id, reason=reason):
+                return await self._pause(task_id, reason)
+            case ResumeTask(task_id=task_id):
+                return await self._resume(task_id)
         raise RequestError(BAD_REQUEST, f"unsupported request {type(request).__name__}")
 
     # ------------------------------------------------------------------ registry
@@ -270,6 +291,7 @@ class TaskService:
             planner=self.planners(options),
             operator_agent=self.operator_agent,
             verify=self.verify,
+            max_events=self.max_events,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:
@@ -306,6 +328,33 @@ class TaskService:
         with anyio.move_on_after(self.abort_wait):
             await done.wait()
         return OkReply(message=f"task {task_id}: {executor.outcome}")
+
+    def _history(self, task_id: str, after: int, limit: int) -> HistoryReply:
+        executor = self._get(task_id)[0]
+        events = executor.history.since(after, limit + 1)
+        return HistoryReply(
+            task_id=task_id,
+            events=events[:limit],
+            outcome=executor.outcome,
+            dropped=executor.history.dropped,
+            more=len(events) > limit,
+        )
+
+    async def _pause(self, task_id: str, reason: str) -> OkReply:
+        executor = self._get(task_id)[0]
+        if executor.outcome != "running":
+            raise RequestError("task_ended", f"task {task_id} has ended: {executor.outcome}")
+        if not await executor.pause(reason or "paused on request"):
+            return OkReply(message=f"task {task_id} is paused already")
+        return OkReply(message=f"task {task_id} paused: no new step starts until resumed")
+
+    async def _resume(self, task_id: str) -> OkReply:
+        executor = self._get(task_id)[0]
+        if executor.outcome != "running":
+            raise RequestError("task_ended", f"task {task_id} has ended: {executor.outcome}")
+        if not await executor.resume():
+            return OkReply(message=f"task {task_id} is not paused")
+        return OkReply(message=f"task {task_id} resumed")
 
 
 async def serve_tasks(

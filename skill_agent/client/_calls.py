@@ -48,6 +48,8 @@ from skill_agent.protocol._runs import (
     Reload,
     ResumeRun,
     RunEvent,
+    RunEvents,
+    RunEventsReply,
     RunFinished,
     RunInfo,
     RunResult,
@@ -255,6 +257,20 @@ class AgentClient:
     async def runs(self, *, active_only: bool = True) -> list[RunInfo]:
         return (await self._expect(ListRuns(active_only=active_only), RunsReply)).runs
 
+    async def run_events(self, run_id: str, after_seq: int = 0) -> RunEventsReply:
+        """A run's state and the events the agent kept of it with ``seq > after_seq`` (its
+        history; UnknownRunError once the agent forgot the run)."""
+        return await self._expect(RunEvents(run_id=run_id, after_seq=after_seq), RunEventsReply)
+
+    @asynccontextmanager
+    async def follow(self, run_id: str) -> AsyncIterator[tuple[RunInfo, AsyncIterator[RunEvent]]]:
+        """A run that started already (by anyone): its state, and an iterator of its events
+        so far (the agent's history) then the live ones, each ``seq`` once, ending with its
+        result. Subscribes before it asks for the history, so no event falls in between."""
+        async with self.watch(run_id) as live:
+            reply = await self.run_events(run_id)
+            yield reply.run, _history_then_live(reply.events, live)
+
     async def reload(self, *, timeout: float = 30.0) -> str:
         """Re-import the agent's skill plug-ins; returns the agent's summary."""
         return (await self._expect(Reload(), OkReply, timeout)).message
@@ -333,3 +349,20 @@ class AgentClient:
                 await self.stop(run_id, timeout=min(self.timeout, 2.0))
             except SkillError as e:
                 _log.debug("could not stop run %s on %s: %s", run_id, self.agent, e)
+
+
+async def _history_then_live(
+    history: list[RunEvent], live: AsyncIterator[RunEvent]
+) -> AsyncIterator[RunEvent]:
+    last_seq = 0
+    for event in history:
+        last_seq = event.seq
+        yield event
+        if isinstance(event, RunResult):
+            return
+    async for event in live:
+        if event.seq <= last_seq:
+            continue  # had it from the history
+        yield event
+        if isinstance(event, RunResult):
+            return

@@ -8,6 +8,7 @@ Key space (prefix ``skimesh/<mesh>``):
 - ``agents/<agent>``                       liveliness token
 - ``agents/<agent>/skills``                queryable: :class:`SkillsReply`
 - ``agents/<agent>/rpc``                   queryable: :data:`AgentRequest` -> :data:`AgentReply`
+  (start, stop, pause, resume, a run's status, the runs, a run's kept events, reload)
 - ``agents/<agent>/runs/<run>/progress``   publication: :data:`RunEvent` (progress, then one result)
 - ``agents/<agent>/events``                publication: :data:`LogEntry` (the agent's event log)
 
@@ -37,6 +38,8 @@ from ._runs import Reload as Reload
 from ._runs import ResultReason as ResultReason
 from ._runs import ResumeRun as ResumeRun
 from ._runs import RunEvent as RunEvent
+from ._runs import RunEvents as RunEvents
+from ._runs import RunEventsReply as RunEventsReply
 from ._runs import RunFinished as RunFinished
 from ._runs import RunInfo as RunInfo
 from ._runs import RunResult as RunResult
@@ -96,6 +99,8 @@ __all__ = [
     "ResultReason",
     "ResumeRun",
     "RunEvent",
+    "RunEvents",
+    "RunEventsReply",
     "RunFinished",
     "RunInfo",
     "RunResult",

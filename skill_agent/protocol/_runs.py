@@ -139,12 +139,28 @@ class ListRuns(Struct, tag=True, tag_field="request", frozen=True, kw_only=True)
     active_only: bool = True
 
 
+class RunEvents(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
+    """One run's state and the events the agent kept of it with ``seq > after_seq``
+    (:class:`RunEventsReply`): a run's history, for a client that comes after its start."""
+
+    run_id: str
+    after_seq: int = 0
+
+
 class Reload(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
     """Re-import the skill plug-ins; running runs finish with the code they started with."""
 
 
 AgentRequest: TypeAlias = (
-    ListSkills | StartRun | StopRun | PauseRun | ResumeRun | RunStatus | ListRuns | Reload
+    ListSkills
+    | StartRun
+    | StopRun
+    | PauseRun
+    | ResumeRun
+    | RunStatus
+    | ListRuns
+    | Reload
+    | RunEvents
 )
 
 
@@ -182,6 +198,16 @@ class OkReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
+class RunEventsReply(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):
+    """A run's state and its kept events, oldest first, the result last once it ended.
+    ``dropped``: progress events the agent did not keep (its bound per run)."""
+
+    run: RunInfo
+    events: list[RunEvent]
+    dropped: int = 0
+    schema_version: int = SCHEMA_VERSION
+
+
 class ErrorReply(meshlink.rpc.ErrorReply, tag="ErrorReply", frozen=True, kw_only=True):
     """Refused; ``code`` is the error class's code (see ``skill_agent``) or a standard code of
     :mod:`meshlink.rpc` (``bad_request``, ``too_large``, ``internal``). The layer's
@@ -192,4 +218,6 @@ class ErrorReply(meshlink.rpc.ErrorReply, tag="ErrorReply", frozen=True, kw_only
     ``unspecified_parameter``, ``inference``): every parameter's state at the refusal."""
 
 
-AgentReply: TypeAlias = SkillsReply | RunStarted | RunFinished | RunsReply | OkReply | ErrorReply
+AgentReply: TypeAlias = (
+    SkillsReply | RunStarted | RunFinished | RunsReply | OkReply | RunEventsReply | ErrorReply
+)

@@ -20,6 +20,9 @@ no network). For an agent ``<a>`` (keys under ``skimesh/<mesh>``):
   the agent's event log (runs started, progress, results, refused starts, world-model writes),
   in order, through the same publisher (queued on the loop, sent in the same bursts; a run's
   entries go out before its result on the progress key);
+- the agent keeps its recent runs' events (:class:`RunHistory`: at most 500 per run, of the
+  last 256 ended runs and every running one), answered to ``RunEvents`` (a run's state and
+  history: ``skimesh runs AGENT RUN``);
 - ``agents/<a>``  liveliness token, declared once the queryables are up, so whoever sees the
   agent alive can call it.
 
@@ -33,6 +36,7 @@ registered robot and devices, and the configuration's ``[hardware]`` bindings to
 published, then, shielded, the agent unregisters and the token is undeclared.
 """
 
+from ._history import RunHistory as RunHistory
 from ._publisher import RunEventPublisher as RunEventPublisher
 from ._service import AgentService as AgentService
 from ._serving import agent_registration as agent_registration
@@ -43,6 +47,7 @@ from ._serving import simulated_outcomes as simulated_outcomes
 __all__ = [
     "AgentService",
     "RunEventPublisher",
+    "RunHistory",
     "agent_registration",
     "run_agent",
     "serve_agent",

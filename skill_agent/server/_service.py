@@ -28,9 +28,13 @@ from skill_agent.protocol._runs import (
     PauseRun,
     Reload,
     ResumeRun,
+    RunEvents,
+    RunEventsReply,
     RunFinished,
     RunInfo,
+    RunResult,
     RunsReply,
+    RunState,
     RunStatus,
     SkillsReply,
     StartRun,
@@ -38,6 +42,7 @@ from skill_agent.protocol._runs import (
 )
 from skill_agent.runtime._agent import AgentCore
 from skill_agent.runtime._plugins import SkillRegistry
+from skill_agent.server._history import RunHistory
 
 __all__ = ["AgentService"]
 
@@ -62,6 +67,9 @@ class AgentService:
         """Run before a reload checks the skills (the agent teaches the world model its
         skills' terms and takes the world model's current ontology)."""
         self._reload_lock = anyio.Lock()
+        self.history = RunHistory()
+        """The recent runs' events (``RunEvents``), bounded: :class:`RunHistory`."""
+        core.subscribe(self.history.add)
         self.rpc: RequestHandler[AgentRequest, AgentReply] = RequestHandler(
             AgentRequest,
             self.handle,
@@ -132,9 +140,33 @@ class AgentService:
                 return RunsReply(runs=[core.status(run_id)])
             case ListRuns(active_only=active_only):
                 return RunsReply(runs=core.runs(active_only=active_only))
+            case RunEvents(run_id=run_id, after_seq=after_seq):
+                return self._run_events(run_id, after_seq)
             case Reload():
                 return await self._reload()
         raise RunStateError(f"unsupported request {type(request).__name__}")  # pragma: no cover
+
+    def _run_events(self, run_id: str, after_seq: int) -> RunEventsReply:
+        """The run's state (from the core, or from its kept result once the core forgot it)
+        and its kept events; UnknownRunError if neither knows the run."""
+        kept = self.history.events(run_id, after_seq)
+        try:
+            info = self.core.status(run_id)
+        except UnknownRunError:
+            result = kept[0][-1] if kept and kept[0] else None
+            if not isinstance(result, RunResult):
+                raise
+            state: RunState = "succeeded" if result.success else "failed"
+            info = RunInfo(
+                run_id=run_id,
+                skill=result.skill,
+                state="preempted" if result.reason == "preempted" else state,
+                params=result.params,
+                started_at=result.started_at,
+                result=result,
+            )
+        events, dropped = kept if kept is not None else ([], 0)
+        return RunEventsReply(run=info, events=events, dropped=dropped)
 
     async def _reload(self) -> OkReply:
         registry = self.registry

@@ -1,6 +1,9 @@
 """The live view of a task on a terminal (``task submit`` / ``task watch`` when stdout is a
 TTY): one view updated in place, with per robot the current step, skill, phase, completion and
-time in the step, and the plan with each step done, running, waiting or failed.
+time in the step, and the plan with each step done, running, waiting or failed. Times count
+from the task's own start (its ``TaskStarted`` stamp): ``task watch`` replays the task's
+history first, so a view opened late shows the plan, the steps already run and the task's
+real clock.
 
 :class:`TaskView` is the model (it takes every :data:`~task_agent.protocol.TaskEvent`) and
 renders it with `rich <https://rich.readthedocs.io>`_ (tables wrap to the terminal's width);
@@ -23,10 +26,12 @@ from task_agent.protocol import (
     StepStarted,
     TaskEvent,
     TaskFinished,
+    TaskPaused,
+    TaskResumed,
     TaskStarted,
 )
 
-from ._task_output import planned_after, planned_call
+from ._task_output import pause_text, planned_after, planned_call
 
 if TYPE_CHECKING:  # rich loads when a view is shown, not for every command
     from rich.console import Console, RenderableType
@@ -64,6 +69,7 @@ class TaskView:
     robots: dict[str, _Robot] = field(default_factory=dict)
     plan: dict[int, _Step] = field(default_factory=dict)
     note: str = ""
+    paused: bool = False
     finished: TaskFinished | None = None
 
     def apply(self, event: TaskEvent) -> None:
@@ -93,8 +99,11 @@ class TaskView:
                     ended.skill, ended.fraction = "", -1.0
             case Replanning():
                 self.note = f"replanning (attempt {event.attempt}): {event.reason}"
+            case TaskPaused() | TaskResumed():
+                self.paused = isinstance(event, TaskPaused)
+                self.note = pause_text(event)
             case TaskFinished():
-                self.finished = event
+                self.finished, self.paused = event, False
 
     def _status(self, step: int, status: str) -> None:
         if step in self.plan:
@@ -106,8 +115,11 @@ class TaskView:
         from rich.text import Text
 
         now = time.time() if now is None else now
+        if self.finished is not None:
+            now = self.finished.stamp
         elapsed = 0.0 if self.t0 is None else now - self.t0
-        head = Text(f"{self.title}  ({elapsed:.1f} s)", style="bold")
+        held = "  PAUSED" if self.paused else ""
+        head = Text(f"{self.title}  ({elapsed:.1f} s){held}", style="bold")
         robots = Table(title="robots", title_justify="left", expand=False)
         for name in ("robot", "step", "skill", "phase", "done", "in step"):
             robots.add_column(name, overflow="fold")

@@ -21,6 +21,8 @@ from task_agent.protocol import (
     TaskEvent,
     TaskFinished,
     TaskInfo,
+    TaskPaused,
+    TaskResumed,
     TaskStarted,
     VerifyProblem,
 )
@@ -29,6 +31,7 @@ __all__ = [
     "ProgressPrinter",
     "check_lines",
     "info_lines",
+    "pause_text",
     "planned_after",
     "planned_call",
     "print_json",
@@ -81,6 +84,8 @@ class ProgressPrinter:
                 return [step_line(at, event.agent, event.step, event.skill, self._end(event))]
             case Replanning():
                 return [f"{at}  replanning (attempt {event.attempt}): {event.reason}"]
+            case TaskPaused() | TaskResumed():
+                return [f"{at}  {pause_text(event)}"]
             case TaskFinished():
                 return self._summary(event)
 
@@ -120,6 +125,15 @@ class ProgressPrinter:
         return lines + check_lines(event.check)
 
 
+def pause_text(event: TaskPaused | TaskResumed) -> str:
+    """``paused (why): no new step starts; runs paused: ...`` / ``resumed; runs resumed: ...``."""
+    runs = ", ".join(event.runs) or "none"
+    if isinstance(event, TaskPaused):
+        why = f" ({event.reason})" if event.reason else ""
+        return f"paused{why}: no new step starts; runs paused: {runs}"
+    return f"resumed; runs resumed: {runs}"
+
+
 def planned_call(step: PlannedStep, names: Mapping[str, str]) -> str:
     """``skill(param=value, ...)`` of a planned step, elements by their display ``names``."""
     args = ", ".join(
@@ -139,8 +153,9 @@ def step_line(at: str, agent: str, step: int, skill: str, text: str) -> str:
 
 def info_lines(info: TaskInfo) -> list[str]:
     ended = f", ended {time.ctime(info.finished_at)}" if info.finished_at else ""
+    state = f"{info.outcome} (paused)" if info.paused else info.outcome
     return [
-        f"{info.task_id}  {info.outcome}  {info.goal or info.name}",
+        f"{info.task_id}  {state}  {info.goal or info.name}",
         f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
         f"{info.replans} replans",
         *([f"  {info.message}"] if info.message else []),

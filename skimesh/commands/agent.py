@@ -1,6 +1,7 @@
 """``skimesh agent`` (serve a skill agent) and the skill-layer CLI: ``skimesh agents``,
-``skimesh skills [AGENT]``, ``skimesh run AGENT SKILL key=value...``, ``skimesh reload AGENT``
-and ``skimesh stop AGENT RUN``.
+``skimesh skills [AGENT]``, ``skimesh run AGENT SKILL key=value...``, ``skimesh reload AGENT``,
+``skimesh stop AGENT RUN``, and (``_runs``) ``skimesh runs [AGENT] [RUN] [--follow]``,
+``skimesh pause AGENT RUN`` and ``skimesh resume AGENT RUN``.
 
 ``skimesh run`` starts a skill from a plain command line and streams its progress until the
 result (SkiROS2 #42). Exit codes: 0 the run succeeded, 1 it failed, 2 the agent refused it
@@ -33,6 +34,7 @@ from wm_store.protocol import Value
 
 from ..errors import SkimeshError
 from ..runtime import run_service
+from . import _runs as runs_command
 from ._connect import mesh_session
 
 __all__ = ["add_parser", "parse_params", "scenario_config_path"]
@@ -43,7 +45,8 @@ EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE, EXIT_INTERRUPTED = 1, 2, 3, 130
 
 
 def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
-    """Add ``agent``, ``agents``, ``skills``, ``run``, ``reload`` and ``stop``."""
+    """Add ``agent``, ``agents``, ``skills``, ``run``, ``reload``, ``stop``, ``runs``,
+    ``pause`` and ``resume``."""
     p = sub.add_parser(
         "agent",
         help="run the skill agent of a robot or smart device (or several, in one process)",
@@ -127,6 +130,14 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     stop.add_argument("run_id", help="the run's id (printed by `skimesh run`)")
     _client_arguments(stop)
     stop.set_defaults(func=lambda a: _client(a, _stop))
+
+    runs_command.add_parsers(
+        sub,
+        client_arguments=_client_arguments,
+        client=_client,
+        print_event=_print_event,
+        print_json=_print_json,
+    )
 
 
 def _zenoh_config_file(path: str) -> str:

@@ -1,5 +1,10 @@
 """``skimesh task-agent`` (the planning / execution service, with the operator agent) and the
-task CLI: ``skimesh task submit|status|list|abort|watch|verify``.
+task CLI: ``skimesh task submit|status|list|abort|pause|resume|watch|verify``.
+
+``skimesh task watch TASK`` on a running or finished task prints the task's history first
+(``TaskStarted``, the plan, every step so far, times from the task's own start), then follows
+it live, each event once. ``task pause TASK`` holds a task (no new step starts; its running
+runs are paused on their agents) until ``task resume TASK``; ``task abort`` works while paused.
 
 ``skimesh task submit --goal TEXT`` (or ``--file TASK.toml``) follows the task to its end with
 one line per event (per robot and per step: started, progress, finished; replanning) and a
@@ -194,7 +199,36 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     _client_arguments(abort)
     abort.set_defaults(func=lambda a: _client(a, _abort))
 
-    watch = cmds.add_parser("watch", help="follow a running task (exit codes as for submit)")
+    pause = cmds.add_parser(
+        "pause",
+        help="hold a task: pause its runs, start no new step until `task resume`",
+        description="Hold a running task: every run of the task is paused on its agent (held "
+        "at its next checkpoint) and no new step starts until `skimesh task resume`. "
+        "`task abort` works while paused. Exit codes: 0 paused (or paused already), 4 errors "
+        "(no such task, the task has ended, no task agent).",
+    )
+    pause.add_argument("task_id", metavar="TASK_ID", help="the task to hold")
+    pause.add_argument("--reason", default="paused from the command line", help="why")
+    _client_arguments(pause)
+    pause.set_defaults(func=lambda a: _client(a, _hold))
+
+    resume = cmds.add_parser(
+        "resume",
+        help="release a paused task: its runs go on, new steps start",
+        description="Release a task held by `skimesh task pause`: its paused runs go on and "
+        "the steps that became ready start. Exit codes: 0 resumed (or not paused), 4 errors.",
+    )
+    resume.add_argument("task_id", metavar="TASK_ID", help="the task to release")
+    _client_arguments(resume)
+    resume.set_defaults(func=lambda a: _client(a, _hold))
+
+    watch = cmds.add_parser(
+        "watch",
+        help="follow a task: its history so far, then live (exit codes as for submit)",
+        description="Print a running or finished task's history (the plan and every event so "
+        "far, times from the task's start), then follow it live to its end. Exit codes as "
+        "for `task submit`.",
+    )
     watch.add_argument("task_id", metavar="TASK_ID", help="the task to follow")
     _follow_arguments(watch)
     _client_arguments(watch)
@@ -400,7 +434,8 @@ async def _list(args: argparse.Namespace) -> int:
     if args.json:
         print_json(tasks)
     for info in [] if args.json else tasks:
-        print(f"{info.task_id:<14} {info.outcome:<10} {info.replans} replans  "
+        state = f"{info.outcome} (paused)" if info.paused else info.outcome
+        print(f"{info.task_id:<14} {state:<10} {info.replans} replans  "
               f"{info.goal or info.name}")  # fmt: skip
     return 0
 
@@ -419,6 +454,18 @@ async def _abort(args: argparse.Namespace) -> int:
     if info.outcome == "running":
         print(f"error: task {args.task_id} is still running after the abort", file=sys.stderr)
         return EXIT_ERROR
+    return 0
+
+
+async def _hold(args: argparse.Namespace) -> int:
+    """``task pause`` / ``task resume``: the service's answer."""
+    async with mesh_session(args) as mesh:
+        client = TaskClient(mesh, timeout=args.timeout)
+        if args.task_command == "pause":
+            message = await client.pause(args.task_id, args.reason)
+        else:
+            message = await client.resume(args.task_id)
+    print_json({"task_id": args.task_id, "reply": message}) if args.json else print(message)
     return 0
 
 

@@ -30,6 +30,8 @@ from task_agent.protocol import (
     StepStarted,
     TaskEvent,
     TaskFinished,
+    TaskPaused,
+    TaskResumed,
     TaskStarted,
 )
 from wm_store.protocol import Value
@@ -125,6 +127,8 @@ class MissionView:
                 return [_row(event.agent, event.step, self._finished_step(event, sim))]
             case Replanning():
                 return [f"replanning (attempt {event.attempt}): {event.reason}"]
+            case TaskPaused() | TaskResumed():
+                return [f"task {'paused' if isinstance(event, TaskPaused) else 'resumed'}"]
             case TaskFinished():
                 self.finished = event
                 self.sim_end, self.wall_end = sim, time.monotonic()

@@ -38,6 +38,8 @@ from task_agent.protocol import (
     StepStarted,
     TaskEvent,
     TaskFinished,
+    TaskPaused,
+    TaskResumed,
     TaskStarted,
 )
 from wm_store import describe_change
@@ -106,6 +108,12 @@ class Translator:
                     text += f" ({event.message})"
             case Replanning():
                 text = f"task {task} replanning (attempt {event.attempt}): {event.reason}"
+            case TaskPaused():
+                text = f"task {task} paused ({len(event.runs)} runs held)"
+                if event.reason:
+                    text += f": {event.reason}"
+            case TaskResumed():
+                text = f"task {task} resumed ({len(event.runs)} runs)"
             case TaskFinished():
                 self._runs_of_task.pop(task, None)
                 outcome = event.outcome

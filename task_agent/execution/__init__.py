@@ -9,19 +9,23 @@
   stopped, operator fallback (semi-autonomy).
 - :class:`SkillRunner` is how one skill runs on one agent: :class:`ZenohRunner` over the mesh,
   :class:`CoreRunner` on in-process agent cores (tests, benchmarks).
+- :class:`EventHistory` keeps a task's events for late watchers (bounded); the task-level
+  pause (``Executor.pause`` / ``resume``) is the scheduler's hold (``_hold``).
 - :class:`RunWrites` follows the agents' event logs: the world-model revisions each run wrote.
 - The steps as data (pure): :class:`StepSpec`, :class:`StepGraph`, :func:`steps_from_plan`,
   :func:`steps_from_file`, :func:`resolve_params` (data flow) and :func:`unmet_goal`.
 
-The code: ``_state`` (the steps as data), ``_runners``, ``_run_writes``, ``_steps`` (the
-scheduler) and ``_executor``. The executor plans through :mod:`task_agent.planning`, so this
-sub-package imports unified-planning.
+The code: ``_state`` (the steps as data), ``_runners``, ``_run_writes``, ``_history``,
+``_hold`` (the pause), ``_steps`` (the scheduler) and ``_executor``. The executor plans
+through :mod:`task_agent.planning`, so this sub-package imports unified-planning.
 """
 
 from ._executor import EXCLUDED_REASONS as EXCLUDED_REASONS
 from ._executor import Executor as Executor
 from ._executor import GoalVerifier as GoalVerifier
 from ._executor import PlanSource as PlanSource
+from ._history import MAX_TASK_EVENTS as MAX_TASK_EVENTS
+from ._history import EventHistory as EventHistory
 from ._run_writes import RunWrites as RunWrites
 from ._run_writes import WatchedRun as WatchedRun
 from ._runners import CoreRunner as CoreRunner
@@ -45,8 +49,10 @@ from ._steps import StepScheduler as StepScheduler
 
 __all__ = [
     "EXCLUDED_REASONS",
+    "MAX_TASK_EVENTS",
     "OPERATOR_NOTE",
     "CoreRunner",
+    "EventHistory",
     "EventSink",
     "Executor",
     "GoalVerifier",

@@ -24,6 +24,9 @@ Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStar
 ``StepProgress`` / ``StepFinished``, ``Replanning``, one ``TaskFinished``.
 :meth:`Executor.abort` stops every run of the task (each agent brings its robot to a safe
 state) and ends it ``aborted``; so does cancelling the executor (the service shutting down).
+:meth:`Executor.pause` holds the task (no new step starts, its runs are paused on their agents;
+``TaskPaused``) until :meth:`Executor.resume` (``TaskResumed``); abort works while paused.
+Every event is kept in :attr:`Executor.history` (bounded: :mod:`._history`).
 """
 
 from __future__ import annotations
@@ -53,8 +56,11 @@ from ..protocol import (
     TaskInfo,
     TaskOptions,
     TaskOutcome,
+    TaskPaused,
+    TaskResumed,
     TaskStarted,
 )
+from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
 from ._state import (
@@ -108,6 +114,7 @@ class Executor:
         agent_wait: float = 5.0,
         writes: RunWrites | None = None,
         verify: GoalVerifier | None = None,
+        max_events: int = MAX_TASK_EVENTS,
     ) -> None:
         self.task_id = task_id
         self.verify = verify
@@ -121,7 +128,9 @@ class Executor:
         self.agent_wait = agent_wait
         """Seconds to wait for an agent when none is available (a router restart makes every
         liveliness token vanish for a few seconds)."""
-        self.events = EventSink(task_id, publish)
+        self.history = EventHistory(max_events)
+        """The task's events so far (at most ``max_events``)."""
+        self.events = EventSink(task_id, publish, self.history)
         self.steps = StepScheduler(
             events=self.events,
             runner=runner,
@@ -155,6 +164,31 @@ class Executor:
             self._abort_reason = reason or "aborted on request"
             self._scope.cancel()
 
+    @property
+    def paused(self) -> bool:
+        return self.steps.hold.held
+
+    async def pause(self, reason: str = "") -> bool:
+        """Hold the task: no new step starts, its started runs are paused on their agents
+        (``TaskPaused``). False if it was held already or has ended."""
+        if self.outcome != "running":
+            return False
+        runs = await self.steps.pause(reason)
+        if runs is None:
+            return False
+        self.events.emit(TaskPaused, reason=reason, runs=runs)
+        return True
+
+    async def resume(self) -> bool:
+        """Release a held task: its paused runs go on, new steps start (``TaskResumed``).
+        False if it was not held."""
+        runs = await self.steps.resume()
+        if runs is None:
+            return False
+        if self.outcome == "running":
+            self.events.emit(TaskResumed, runs=runs)
+        return True
+
     def info(self) -> TaskInfo:
         return TaskInfo(
             task_id=self.task_id,
@@ -167,6 +201,7 @@ class Executor:
             steps_run=self.steps.steps_run,
             message=self.message,
             check=self.check,
+            paused=self.paused and self.outcome == "running",
         )
 
     async def run_goal(self, goal: Goal) -> TaskFinished:

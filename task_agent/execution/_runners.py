@@ -13,6 +13,9 @@ that cannot be reached or disappears raises ``AgentTransportError``. When the ca
 cancelled (abort, agent loss, a failed branch), the run is stopped on the agent (its
 ``on_preempt`` brings the robot to a safe state), shielded and within ``stop_timeout``, and the
 result of the stopped run is passed to ``on_event`` before the cancellation goes on.
+:meth:`SkillRunner.pause` and :meth:`SkillRunner.resume` hold and release a started run on its
+agent (a task-level pause); they raise the :mod:`skill_agent` class of a refusal
+(``RunStateError`` for a run that ended meanwhile, ``UnknownRunError``).
 """
 
 from __future__ import annotations
@@ -45,6 +48,10 @@ class SkillRunner(Protocol):
     async def run(
         self, agent: str, request: StartRun, *, on_started: OnStarted, on_event: OnEvent
     ) -> RunResult: ...
+
+    async def pause(self, agent: str, run_id: str) -> None: ...
+
+    async def resume(self, agent: str, run_id: str) -> None: ...
 
 
 class ZenohRunner:
@@ -101,6 +108,12 @@ class ZenohRunner:
                     await self._stop(client, request.run_id, on_event)
         raise AgentTransportError(f"the events of run {request.run_id} ended without a result")
 
+    async def pause(self, agent: str, run_id: str) -> None:
+        await AgentClient(self.mesh, agent, timeout=self.timeout).pause(run_id)
+
+    async def resume(self, agent: str, run_id: str) -> None:
+        await AgentClient(self.mesh, agent, timeout=self.timeout).resume(run_id)
+
     async def _stop(self, client: AgentClient, run_id: str, on_event: OnEvent) -> None:
         if self.alive is not None and not self.alive(client.agent):
             return
@@ -126,6 +139,18 @@ class CoreRunner:
             for info in core.runs():
                 with anyio.CancelScope(shield=True):
                     await core.stop(info.run_id)
+
+    def _core(self, agent: str) -> AgentCore:
+        core = self.cores.get(agent)
+        if core is None or agent in self.gone:
+            raise AgentTransportError(f"agent {agent!r} is not reachable")
+        return core
+
+    async def pause(self, agent: str, run_id: str) -> None:
+        await self._core(agent).pause(run_id)
+
+    async def resume(self, agent: str, run_id: str) -> None:
+        await self._core(agent).resume(run_id)
 
     async def run(
         self, agent: str, request: StartRun, *, on_started: OnStarted, on_event: OnEvent

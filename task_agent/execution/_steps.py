@@ -21,6 +21,10 @@ scheduler) whose call allows it, or whose task does (``TaskOptions.operator_fall
 skill, ``operator_fallback_skills`` for the skills named), is handed to the operator agent: the
 same skill with the parameters it ran with, plus ``operator_note`` saying what failed; a person
 answers it (:mod:`task_agent.operator`) and a success counts as the step's success.
+
+Pause (:attr:`StepScheduler.hold`, a :class:`~task_agent.execution._hold.Hold`): while the task
+is held no step starts and the task's started runs are paused on their agents; releasing it
+resumes them and starts the steps that became ready meanwhile.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from typing import Any, TypeVar, cast
 
 import anyio
 import msgspec
+from anyio.abc import TaskGroup
 from anyio.streams.memory import MemoryObjectSendStream
 
 from skill_agent import AgentTransportError, SkillError
@@ -43,6 +48,8 @@ from wm_store.protocol import Value
 from .._errors import StepInputError
 from ..discovery import Discovery
 from ..protocol import StepFinished, StepProgress, StepStarted, TaskEvent, TaskOptions
+from ._history import EventHistory
+from ._hold import Hold
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
 from ._state import (
@@ -59,16 +66,24 @@ E = TypeVar("E", bound=msgspec.Struct)
 
 
 class EventSink:
-    """Numbers a task's events (``seq`` 1, 2, ...), stamps and publishes them."""
+    """Numbers a task's events (``seq`` 1, 2, ...), stamps them, keeps them in ``history``
+    (bounded, for late watchers) and publishes them."""
 
-    def __init__(self, task_id: str, publish: Callable[[TaskEvent], None]) -> None:
+    def __init__(
+        self,
+        task_id: str,
+        publish: Callable[[TaskEvent], None],
+        history: EventHistory | None = None,
+    ) -> None:
         self.task_id = task_id
         self.publish = publish
+        self.history = history if history is not None else EventHistory()
         self.seq = 0
 
     def emit(self, kind: type[E], **fields: Any) -> E:
         self.seq += 1
         event = kind(task_id=self.task_id, seq=self.seq, stamp=time.time(), **fields)
+        self.history.add(cast("TaskEvent", event))
         self.publish(cast("TaskEvent", event))
         return event
 
@@ -122,36 +137,67 @@ class StepScheduler:
         """Call id -> the parameters it ran with (task-file data flow)."""
         self.steps_run = 0
         self.effects_revision = 0
+        self.hold = Hold(runner, events.task_id)
+        """The task-level pause (see the module doc)."""
         self._running: dict[int, _Running] = {}
+        self._wake: MemoryObjectSendStream[StepOutcome | None] | None = None
+        self._tg: TaskGroup | None = None
+
+    async def pause(self, reason: str = "") -> list[str] | None:
+        """Hold the task (no step starts) and pause its started runs; returns them
+        (``agent/run``), or None if it was held already."""
+        if self.hold.held:
+            return None
+        return await self.hold.hold(reason)
+
+    async def resume(self) -> list[str] | None:
+        """Release the task: resume the runs the pause held, start the ready steps; returns
+        the runs resumed, or None if the task was not held."""
+        if not self.hold.held:
+            return None
+        resumed = await self.hold.release()
+        if self._wake is not None:
+            self._wake.send_nowait(None)
+        return resumed
 
     async def run(self, steps: list[StepSpec]) -> StepOutcome | None:
         """Run ``steps``; returns the first failure, or None when every step succeeded."""
         graph = StepGraph(steps)
         failure: StepOutcome | None = None
-        send, receive = anyio.create_memory_object_stream[StepOutcome](math.inf)
+        send, receive = anyio.create_memory_object_stream[StepOutcome | None](math.inf)
         unsubscribe = self.discovery.on_presence(self._presence)
         try:
             with send, receive:
                 async with anyio.create_task_group() as tg:
+                    self._wake, self._tg = send, tg
                     while True:
-                        for spec in graph.ready() if failure is None else ():
+                        for spec in graph.ready() if self._may_start(failure) else ():
                             graph.start(spec.index)
                             tg.start_soon(self._step, spec, send, name=f"task step {spec}")
                         if not graph.running:
+                            if failure is None and self.hold.held and graph.ready():
+                                await self.hold.wait()
+                                continue
                             break
                         outcome = await receive.receive()
+                        if outcome is None:  # resumed: start what became ready
+                            continue
                         graph.finish(outcome.index, outcome.success)
                         if not outcome.success and failure is None:
                             failure = outcome
                             why = f"stopped because {outcome}"
                             self._stop(outcome.agent, "stopped", why, True)
         finally:
+            self._wake = self._tg = None
             unsubscribe()
         return failure
 
+    def _may_start(self, failure: StepOutcome | None) -> bool:
+        return failure is None and not self.hold.held
+
     # ------------------------------------------------------------------ one step
 
-    async def _step(self, spec: StepSpec, done: MemoryObjectSendStream[StepOutcome]) -> None:
+    async def _step(self, spec: StepSpec, done: MemoryObjectSendStream[StepOutcome | None]) -> None:
         outcome = await self._attempt(spec, spec.agent or self._choose(spec.skill))
         if self._fallback_allowed(spec, outcome):
             note = f"task {self.events.task_id}, {outcome}. Please do it by hand."
@@ -186,6 +232,7 @@ class StepScheduler:
         self, spec: StepSpec, agent: str, *, params: dict[str, Value] | None = None
     ) -> StepOutcome:
         by_operator = params is not None and agent == self.operator_agent
+        await self.hold.wait()  # a step spawned just before a pause starts after it
         outcome = StepOutcome(
             index=spec.index, agent=agent, skill=spec.skill, success=False, reason="unavailable"
         )
@@ -210,6 +257,8 @@ class StepScheduler:
         results: list[RunResult] = []
 
         def on_started(started: RunStarted) -> None:
+            if self.hold.started(agent, started.run_id) and self._tg is not None:
+                self._tg.start_soon(self.hold.pause_run, agent, started.run_id)
             self.steps_run += 1
             outcome.params = dict(started.params)
             if spec.call_id:
@@ -262,6 +311,7 @@ class StepScheduler:
                 raise
             finally:
                 self._running.pop(spec.index, None)
+                self.hold.ended(request.run_id)
         reason, message, outcome.stopped = running.why or ("", "", False)
         self._from_result(outcome, results, reason, message)
         return self._finished(outcome, by_operator)

@@ -101,3 +101,29 @@ def test_the_live_view_shows_robots_and_the_plan_as_the_task_goes() -> None:
     view.apply(StepFinished(task_id="t-1", seq=5, stamp=103.0, step=0, agent="r1",
                             skill="navigate", success=True, reason="succeeded"))  # fmt: skip
     assert view.plan[0].status == "done" and view.robots["r1"].phase == "idle"
+
+
+def test_pause_and_resume_are_shown_in_lines_and_in_the_live_view() -> None:
+    import io
+
+    from rich.console import Console
+
+    from skimesh.commands._live import TaskView
+    from task_agent.protocol import TaskPaused, TaskResumed, TaskStarted
+
+    start = TaskStarted(task_id="t-1", seq=1, stamp=100.0, goal="g")
+    paused = TaskPaused(task_id="t-1", seq=2, stamp=104.5, reason="coffee", runs=["r1/a"])
+    resumed = TaskResumed(task_id="t-1", seq=3, stamp=110.0, runs=["r1/a"])
+    printer = ProgressPrinter()
+    lines = [line for e in (start, paused, resumed) for line in printer.lines(e)]
+    assert lines[1] == "   4.50s  paused (coffee): no new step starts; runs paused: r1/a"
+    assert lines[2] == "  10.00s  resumed; runs resumed: r1/a"
+    view = TaskView()
+    for event in (start, paused):
+        view.apply(event)
+    out = io.StringIO()
+    console = Console(file=out, width=120, force_terminal=False, color_system=None)
+    console.print(view.render(now=105.0))
+    assert "task t-1: g  (5.0 s)  PAUSED" in out.getvalue()
+    view.apply(resumed)
+    assert not view.paused and view.note == "resumed; runs resumed: r1/a"
