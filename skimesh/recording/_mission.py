@@ -14,6 +14,8 @@ skills' code. Entities::
     robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
     robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
     world_model/changes      TextLog: one line per committed transaction (revision + summary)
+    belief/<label>           Boxes3D: where the world model believes each object is
+                             (:class:`BeliefLayer`, once :meth:`MissionRecording.follow_beliefs`)
     agents/<agent>/events    TextLog: the agent's event log: runs started, results, refused
                              starts, world-model writes (:func:`record_agent_events`)
     demo/log                 TextLog: the demo's own lines (start-up, verification, summary)
@@ -48,8 +50,10 @@ from wm_store.protocol import (
     Change,
     Value,
 )
+from wm_store.scene import SceneState
 
 from ._agents import AgentEventLines
+from ._belief import BeliefLayer
 
 __all__ = ["CallText", "MissionRecording", "step_text"]
 
@@ -112,6 +116,8 @@ class MissionRecording:
         self.robots = dict(robots or {})
         self._t0 = time.monotonic()
         self._steps: dict[int, str] = {}
+        self.beliefs: BeliefLayer | None = None
+        self._state: Callable[[], SceneState] | None = None
         self.agents = AgentEventLines(
             rec,
             sim_clock=sim_clock,
@@ -136,9 +142,20 @@ class MissionRecording:
         self.rec.log("demo/log", rr.TextLog(text, level=level))
 
     def wm_change(self, change: Change) -> None:
-        """One world-model change (call it from the client's change callback)."""
+        """One world-model change (call it from the client's change callback, which runs
+        after the replica applied it): its line, and the ghosts it moved."""
         self._now()
         self.rec.log("world_model/changes", rr.TextLog(describe_change(change, self.label_of)))
+        if self.beliefs is not None and self._state is not None:
+            self.beliefs.update(self._state())
+
+    def follow_beliefs(self, labels: Iterable[str], state: Callable[[], SceneState]) -> None:
+        """From now on, show where the world model (``state()``: the replica's state) believes
+        the elements labelled ``labels`` are (:class:`BeliefLayer`); logs them now, then after
+        every change :meth:`wm_change` sees."""
+        self.beliefs, self._state = BeliefLayer(self.rec, labels), state
+        self._now()
+        self.beliefs.update(state())
 
     def agent_entry(self, entry: LogEntry) -> None:
         """One entry of an agent's event log (buffered; progress is left out)."""
@@ -220,4 +237,5 @@ class MissionRecording:
         """The entity paths this class writes (for checks)."""
         fixed = ["task/events", "task/plan", "world_model/changes", "demo/log"]
         per_robot = [f"robots/{r}/{k}" for r in self.robots.values() for k in ("skill", "progress")]
-        return [*fixed, *per_robot, *self.agents.entities()]
+        ghosts = [] if self.beliefs is None else map(BeliefLayer.entity, self.beliefs.shown)
+        return [*fixed, *per_robot, *self.agents.entities(), *ghosts]
