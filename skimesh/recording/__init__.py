@@ -11,7 +11,8 @@
   labels on its robots and objects (:class:`Label`, :class:`SceneLayout`);
 - :class:`BeliefLayer` draws where the world model believes each object is (ghosts under
   ``belief/``; :meth:`MissionRecording.follow_beliefs`);
-- :func:`inspect_recording`, :func:`recorded_eye` and :func:`cut_recording` read a finished
+- :func:`inspect_recording`, :func:`recorded_eye`, :func:`recorded_views` and
+  :func:`cut_recording` read a finished
   ``.rrd`` (:class:`RecordingFacts`) for ``scripts/screenshot``, whose helper is
   ``python -m skimesh.recording`` (``--help``).
 
@@ -31,6 +32,7 @@ from ._inspect import RecordingFacts as RecordingFacts
 from ._inspect import cut_recording as cut_recording
 from ._inspect import inspect_recording as inspect_recording
 from ._inspect import recorded_eye as recorded_eye
+from ._inspect import recorded_views as recorded_views
 from ._mission import CallText as CallText
 from ._mission import MissionRecording as MissionRecording
 from ._mission import step_text as step_text
@@ -57,6 +59,7 @@ __all__ = [
     "record_agent_events",
     "record_scene",
     "recorded_eye",
+    "recorded_views",
     "scene_layout",
     "scene_points",
     "step_text",

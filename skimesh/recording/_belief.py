@@ -1,7 +1,7 @@
 """The world model's beliefs in the 3-D view: a ghost box at each object's believed pose.
 
 The physics (``world/<body>``) shows where things are; :class:`BeliefLayer` shows where the
-world model *believes* they are: for each object it follows, a translucent wireframe box
+world model *believes* they are: for each object it follows, a wireframe box in a colour of its own
 ``belief/<label>`` at the element's world pose (its ``pose`` frames chained up to the world,
 :class:`wm_store.reasoners.SpatialReasoner`) with the element's ``size``. A prior that is a
 centimetre off, a part believed in the gripper while it lies on the floor, a robot believed at
@@ -26,9 +26,9 @@ from ._blueprint import BELIEF
 
 __all__ = ["GHOST_COLOR", "BeliefLayer"]
 
-GHOST_COLOR = (110, 220, 255, 170)
-"""Light cyan, partly transparent: no scenario paints a body in it."""
-_LINE = 0.002  # m: the ghost's edges
+GHOST_COLOR = (80, 235, 255, 200)
+"""Bright cyan, a little transparent: no scenario paints a body in it."""
+_LINE = 0.003  # m: the ghost's edges
 
 Ghost = tuple[tuple[float, ...], ...]  # centre, rotation (x, y, z, w), size: what is drawn
 

@@ -14,7 +14,7 @@
     +-------------+-------------------+------------------------------+
 
 The 3-D view shows ``world/**`` (the physics, with a label over each robot and object) and
-``belief/**`` (where the world model believes each object is: translucent ghosts), each
+``belief/**`` (where the world model believes each object is: cyan wireframe ghosts), each
 toggled by its entity path in the viewer's blueprint panel. The side panels are hidden and
 the ``sim_time`` timeline selected. Send it with the recording
 (``rec.send_blueprint(blueprint(...))``) or save it as an ``.rbl`` file that the viewer loads
@@ -170,7 +170,7 @@ def blueprint(
             rrb.Horizontal(
                 _world(eye),
                 rrb.Vertical(*side) if len(side) > 1 else side[0],
-                column_shares=[5, 2],
+                column_shares=[3, 2],
             ),
             rrb.Horizontal(*logs, column_shares=shares),
             row_shares=[7, 3],

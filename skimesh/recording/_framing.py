@@ -1,8 +1,8 @@
 """Where the 3-D view's camera looks: framing a set of points, and the points of a scene.
 
-:func:`scene_points` takes the corners around every visible geom of a MuJoCo world that
-belongs to a body (robots, stations, shelves, boxes, parts; not the world body's own geoms:
-the floor and anything drawn on it), and :func:`frame` places an orbital camera that looks at
+:func:`scene_points` takes the corners of every visible geom of a MuJoCo world that belongs to
+a body (robots' bases, stations, shelves, boxes, parts; not the world body's own geoms: the
+floor and anything drawn on it), and :func:`frame` places an orbital camera that looks at
 their centre from a fixed direction and just fits them, so the default view shows the robots
 and the work however large the floor and wherever the scenario puts things.
 """
@@ -10,16 +10,18 @@ and the work however large the floor and wherever the scenario puts things.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["ASPECT", "Eye", "Vec", "frame", "scene_points"]
+__all__ = ["ASPECT", "Eye", "Vec", "frame", "geom_corners", "scene_points"]
 
 _FOV_Y = 55.0  # degrees: the vertical field of view of rerun's 3-D views
-ASPECT = 1.9
-"""Width / height of the default layout's 3-D view in a 16:9 window (see ``blueprint``)."""
+ASPECT = 1.6
+"""Width / height of the default layout's 3-D view in a 16:9 window (3/5 of its width, 7/10
+of its height less the panels' title bars: see ``blueprint``)."""
 Vec = np.ndarray[Any, Any]
 
 
@@ -79,22 +81,42 @@ def frame(
     )
 
 
-def scene_points(model: Any, data: Any) -> Vec:
-    """Points around every visible geom of a MuJoCo world that belongs to a body (the world
-    body's own geoms, the floor among them, are left out): the corners of each geom's
-    bounding cube, none below the floor. For :func:`frame`; call it after ``mj_forward``.
-    Reads the model's arrays only (``ngeom``, ``geom_rgba``, ``geom_bodyid``, ``geom_rbound``
-    and ``data.geom_xpos``), so it needs no mujoco import."""
+def scene_points(model: Any, data: Any, *, robots: Sequence[str] = ()) -> Vec:
+    """The corners of every visible geom of a MuJoCo world that belongs to a body (the world
+    body's own geoms, the floor among them, are left out): each geom's bounding box in its own
+    frame (``geom_aabb``), placed where the geom is; none below the floor. Of each robot in
+    ``robots`` (bodies ``<robot>/...``) only the base (``<robot>/base``) counts: an arm in its
+    start posture, raised, would stretch the view far above where it works. For
+    :func:`frame`; call it after ``mj_forward``. Reads the model's and data's arrays only, so
+    it needs no mujoco import."""
+    arms = tuple(f"{robot}/" for robot in robots)
+    bases = {f"{robot}/base" for robot in robots}
+
+    def counts(body: int) -> bool:
+        if body == 0:
+            return False
+        name = str(model.body(body).name)
+        return name in bases or not name.startswith(arms)
+
     seen = [
         g
         for g in range(model.ngeom)
-        if model.geom_rgba[g, 3] > 0 and int(model.geom_bodyid[g]) != 0
+        if model.geom_rgba[g, 3] > 0 and counts(int(model.geom_bodyid[g]))
     ]
     if not seen:
         return np.zeros((1, 3))
-    center = np.asarray(data.geom_xpos)[seen]
-    radius = np.asarray(model.geom_rbound)[seen][:, None]
-    cube = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).T.reshape(-1, 3)
-    points = (center[:, None, :] + radius[:, None, :] * cube[None, :, :]).reshape(-1, 3)
+    points = geom_corners(model, data, seen)
     points[:, 2] = np.maximum(points[:, 2], 0.0)
-    return np.asarray(points, dtype=float)
+    return points
+
+
+def geom_corners(model: Any, data: Any, geoms: Sequence[int]) -> Vec:
+    """The 8 corners of each geom's bounding box (``geom_aabb``, in the geom's frame) where
+    the geom is now (n x 3, world coordinates)."""
+    aabb = np.asarray(model.geom_aabb, dtype=float)[list(geoms)]  # centre (3), half sizes (3)
+    signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).T.reshape(-1, 3)
+    local = aabb[:, None, :3] + aabb[:, None, 3:] * signs[None, :, :]  # geom frame
+    rotation = np.asarray(data.geom_xmat, dtype=float)[list(geoms)].reshape(-1, 3, 3)
+    center = np.asarray(data.geom_xpos, dtype=float)[list(geoms)]
+    points = np.einsum("gij,gcj->gci", rotation, local) + center[:, None, :]
+    return np.asarray(points.reshape(-1, 3), dtype=float)

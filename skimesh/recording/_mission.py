@@ -10,7 +10,8 @@ skills' code. Entities::
 
     task/events              TextLog: one line per task event (replans WARN, failures ERROR)
     task/plan                TextDocument (markdown): the plan's steps and partial order
-    task/plan/graph          GraphNodes + GraphEdges: steps, and "must finish first" edges
+    task/plan/graph          GraphNodes + GraphEdges: steps, and "must finish first" edges;
+                             one row per agent, its steps left to right in planned order
     robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
     robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
     world_model/changes      TextLog: one line per committed transaction (revision + summary)
@@ -214,6 +215,7 @@ class MissionRecording:
         ]
         nodes, labels = [], []
         edges: list[tuple[str, str]] = []
+        positions = _swimlanes(event)
         for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
             call = self.call_text(s.agent, s.skill, s.params)
             after = ", ".join(map(str, s.after)) or "-"
@@ -225,7 +227,8 @@ class MissionRecording:
             edges += [(str(before), str(s.index)) for before in s.after]
         self.rec.log("task/plan", rr.TextDocument("\n".join(lines), media_type="text/markdown"))
         if nodes:
-            self.rec.log("task/plan/graph", rr.GraphNodes(nodes, labels=labels))
+            where = [positions[int(n)] for n in nodes]
+            self.rec.log("task/plan/graph", rr.GraphNodes(nodes, labels=labels, positions=where))
             self.rec.log("task/plan/graph", rr.GraphEdges(edges, graph_type="directed"))
         return (
             f"plan {event.attempt}: {len(event.steps)} steps, estimated makespan "
@@ -239,3 +242,20 @@ class MissionRecording:
         per_robot = [f"robots/{r}/{k}" for r in self.robots.values() for k in ("skill", "progress")]
         ghosts = [] if self.beliefs is None else map(BeliefLayer.entity, self.beliefs.shown)
         return [*fixed, *per_robot, *self.agents.entities(), *ghosts]
+
+
+_COLUMN, _ROW = 120.0, 45.0  # graph units between a lane's steps, between lanes
+
+
+def _swimlanes(event: Planned) -> dict[int, tuple[float, float]]:
+    """Where each step of a plan is drawn: one row per agent (in order of their first step),
+    each agent's steps left to right in the order they are planned to start."""
+    steps = sorted(event.steps, key=lambda s: (s.start, s.index))
+    lanes = list(dict.fromkeys(s.agent for s in steps))
+    done: dict[str, int] = {}
+    out: dict[int, tuple[float, float]] = {}
+    for s in steps:
+        column = done.get(s.agent, 0)
+        done[s.agent] = column + 1
+        out[s.index] = (column * _COLUMN, lanes.index(s.agent) * _ROW)
+    return out

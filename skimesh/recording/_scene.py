@@ -2,8 +2,8 @@
 
 :func:`scene_layout` reads a MuJoCo world once, before it steps (its arrays only: no mujoco
 import here): the camera framing the robots and the work (:func:`frame` of
-:func:`scene_points`), a label per robot (over its base) and per object and piece of
-furniture, and each robot's arm colour. :func:`record_scene` logs the labels into the world's
+:func:`scene_points`), a label per robot (on its base) and per object (over it), and each
+robot's arm colour. :func:`record_scene` logs the labels into the world's
 recording (static, ``world/<body>/label``: they ride on the bodies) and sends the default
 layout (:func:`blueprint`) made from them; ``skimesh demo`` and ``skimesh sim --rerun`` call
 it once the world is built.
@@ -22,11 +22,11 @@ import rerun as rr
 from mujoco_sim import SimWorld
 
 from ._blueprint import WORLD, blueprint
-from ._framing import Eye, frame, scene_points
+from ._framing import Eye, frame, geom_corners, scene_points
 
 __all__ = ["Label", "SceneLayout", "record_scene", "scene_cameras", "scene_layout"]
 
-_ABOVE = 0.05  # m: a label's gap above the top of what it names
+_ABOVE = 0.03  # m: a label's gap above the top of what it names
 _CAPSULE = 3  # mujoco.mjtGeom.mjGEOM_CAPSULE
 _LABEL_COLOR = (235, 235, 235)
 
@@ -59,7 +59,8 @@ def _names(model: Any) -> list[str]:
 
 
 def _subtree_top(model: Any, data: Any, body: int) -> float:
-    """Height of the top of ``body`` and everything attached below it, above its origin."""
+    """Height of the top of ``body`` and everything attached below it, above its origin
+    (plus a gap)."""
     parents = np.asarray(model.body_parentid)
     inside = {body}
     for b in range(body + 1, model.nbody):  # MuJoCo numbers a child after its parent
@@ -69,8 +70,7 @@ def _subtree_top(model: Any, data: Any, body: int) -> float:
     geoms = [g for g in range(model.ngeom) if int(owners[g]) in inside]
     if not geoms:
         return _ABOVE
-    xpos, rbound = np.asarray(data.geom_xpos), np.asarray(model.geom_rbound)
-    top = max(float(xpos[g, 2] + rbound[g]) for g in geoms)
+    top = float(geom_corners(model, data, geoms)[:, 2].max())
     return top - float(np.asarray(data.xpos)[body, 2]) + _ABOVE
 
 
@@ -79,8 +79,9 @@ def scene_layout(
 ) -> SceneLayout:
     """The camera, labels and robot colours of a world (after ``mj_forward``; in the
     simulation thread). ``robots``: the scenario's robot names (bodies ``<robot>/...``; the
-    label goes over ``<robot>/base``, else its first body); ``objects``: the bodies to label
-    by their own name (objects, furniture; unknown names are skipped)."""
+    label sits on ``<robot>/base``'s origin, else its first body's, where no object's label
+    is); ``objects``: the bodies to label by their own name, just over their top (parts,
+    containers, appliances; unknown names are skipped)."""
     names = _names(model)
     index = {n: b for b, n in enumerate(names)}
     labels: list[Label] = []
@@ -90,7 +91,7 @@ def scene_layout(
         own = [b for b, n in enumerate(names) if n.startswith(f"{robot}/")]
         base = index.get(f"{robot}/base", own[0] if own else None)
         if base is not None:
-            labels.append(Label(names[base], robot, _subtree_top(model, data, base)))
+            labels.append(Label(names[base], robot, 0.0))
         capsules = [g for g in range(model.ngeom) if geom_type[g] == _CAPSULE and owners[g] in own]
         if capsules:
             r, g, b = (np.clip(model.geom_rgba[capsules[0], :3], 0, 1) * 255).astype(int)
@@ -98,7 +99,8 @@ def scene_layout(
     for name in objects:
         if name in index:
             labels.append(Label(name, name, _subtree_top(model, data, index[name])))
-    return SceneLayout(eye=frame(scene_points(model, data)), labels=labels, colors=colors)
+    eye = frame(scene_points(model, data, robots=robots))
+    return SceneLayout(eye=eye, labels=labels, colors=colors)
 
 
 def scene_cameras(world: SimWorld) -> list[str]:
@@ -123,12 +125,11 @@ async def record_scene(
     (``robots``: the names of the progress lines, see :func:`blueprint`; ``images``: with
     the cameras' views). Call it once the world is built, before it steps."""
     scenario = world.scenario
-    objects = [*world.facts.objects, *(f.label for f in scenario.furniture)]
     layout = await world.call(
         partial(
             scene_layout,
             robots=[r.name for r in scenario.robots],
-            objects=list(dict.fromkeys(objects)),
+            objects=list(world.facts.objects),
         )
     )
     rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # the 3-D view's origin

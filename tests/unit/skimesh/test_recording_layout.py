@@ -18,6 +18,7 @@ from skimesh.recording import (
     blueprint,
     frame,
     recorded_eye,
+    recorded_views,
     scene_layout,
     scene_points,
 )
@@ -133,7 +134,12 @@ def test_scene_points_leave_out_the_floor_and_what_is_not_drawn(
     lo, hi = points.min(axis=0), points.max(axis=0)
     assert lo[2] == 0.0  # nothing below the floor
     assert lo[0] > -2.0 and hi[0] < 2.5 and lo[1] > -2.0 and hi[1] < 2.0  # not the 10 m floor
-    assert hi[0] > 1.8  # the shelf's far side is in
+    assert hi[0] == pytest.approx(1.9)  # the shelf's far side, exactly (its box, not a sphere)
+    assert hi[2] == pytest.approx(0.84)  # the top of r1's arm: 0.2 + 0.6 m and its cap
+    # of a robot, only its base: its arm raised at the start does not stretch the view
+    work = scene_points(*world, robots=["r1", "r2"])
+    assert work.max(axis=0)[2] == pytest.approx(0.72 + 0.0125)  # the gear's top, on the shelf
+    assert work.min(axis=0)[0] == pytest.approx(-1.25)  # r1's and r2's bases are in
 
 
 def test_scene_layout_labels_robots_and_objects_and_takes_the_arm_colour(
@@ -146,41 +152,28 @@ def test_scene_layout_labels_robots_and_objects_and_takes_the_arm_colour(
     labels = {label.text: label for label in found.labels}
     assert sorted(labels) == ["Gear-1", "Station-1", "r1", "r2"]  # unknown bodies skipped
     assert labels["r1"].body == "r1/base" and labels["r1"].entity == "world/r1.base/label"
-    # over the robot's arm (0.6 m capsule on a 0.2 m base), not inside the base
-    assert 0.75 < labels["r1"].height < 0.9
-    assert 0.0 < labels["Gear-1"].height < 0.1
+    assert labels["r1"].height == 0.0  # on the base, below the objects it carries
+    # just over the top of an object (a 2.5 cm high gear, its origin at its centre)
+    assert labels["Gear-1"].height == pytest.approx(0.0125 + 0.03, abs=0.01)
     assert found.colors == {"r1": (51, 102, 204)}  # r2 has no capsule: the palette's
-    assert found.eye == frame(scene_points(model, data))
+    assert found.eye == frame(scene_points(model, data, robots=["r1", "r2"]))
 
 
-def _blueprint_rows(path: Path) -> dict[str, dict[str, list[object]]]:
-    """Every blueprint entity's components (column -> values) of an ``.rbl`` or ``.rrd``."""
+def _views(path: Path) -> dict[str, tuple[str, str]]:
+    return recorded_views(rerun.chunk.RrdReader(str(path)))
+
+
+def _queries(path: Path) -> str:
+    """The content queries of every view of a layout, one per line."""
     reader = rerun.chunk.RrdReader(str(path))
-    rows: dict[str, dict[str, list[object]]] = {}
+    lines = []
     for store in reader.blueprints():
         for chunk in reader.stream(store=store).to_chunks():
             batch = chunk.to_record_batch()
-            entity = rows.setdefault(str(chunk.entity_path), {})
-            for name in batch.schema.names:
-                if ":" in name:
-                    cells = batch.column(name).to_pylist()
-                    values = entity.setdefault(name, [])
-                    values += [
-                        v for cell in cells for v in (cell if isinstance(cell, list) else [cell])
-                    ]
-    return rows
-
-
-def _views(rows: dict[str, dict[str, list[object]]]) -> dict[str, tuple[str, str]]:
-    """Each view's name -> (class, origin)."""
-    out = {}
-    for entity in rows.values():
-        if "ViewBlueprint:class_identifier" in entity:
-            (cls,) = entity["ViewBlueprint:class_identifier"]
-            (name,) = entity["ViewBlueprint:display_name"]
-            (origin,) = entity["ViewBlueprint:space_origin"]
-            out[str(name)] = (str(cls), "/" + str(origin).lstrip("/"))
-    return out
+            if "ViewContents:query" in batch.schema.names:
+                for cell in batch.column("ViewContents:query").to_pylist():
+                    lines += [str(q) for q in cell or []]
+    return "\n".join(lines)
 
 
 def test_the_default_layout_holds_the_mission_views(tmp_path: Path) -> None:
@@ -188,9 +181,7 @@ def test_the_default_layout_holds_the_mission_views(tmp_path: Path) -> None:
     layout = blueprint(robots=["r1", "r2"], eye=eye, cameras=["Camera-1", "r1/wrist_camera"])
     path = tmp_path / "layout.rbl"
     layout.save("skimesh-test", path)
-    rows = _blueprint_rows(path)
-    views = _views(rows)
-    assert views == {
+    assert _views(path) == {
         "World: physics, labels, world-model beliefs": ("3D", "/"),
         "Plan (arrows: must finish first)": ("Graph", "/task/plan/graph"),
         "Progress of each robot's step": ("TimeSeries", "/"),
@@ -201,8 +192,7 @@ def test_the_default_layout_holds_the_mission_views(tmp_path: Path) -> None:
         "Agents' logs": ("TextLog", "/"),
         "Robots' steps": ("TextLog", "/"),
     }
-    queries = [str(q) for e in rows.values() for q in e.get("ViewContents:query", [])]
-    text = "\n".join(queries)
+    text = _queries(path)
     for shown in ("world/**", "belief/**", "world_model/changes", "agents/**", "task/events"):
         assert f"+ {shown}" in text or f"+ /{shown}" in text, (shown, text)
 
@@ -210,8 +200,7 @@ def test_the_default_layout_holds_the_mission_views(tmp_path: Path) -> None:
 def test_a_world_alone_shows_its_device_events_and_no_plan(tmp_path: Path) -> None:
     path = tmp_path / "layout.rbl"
     blueprint(mission=False).save("skimesh-test", path)
-    views = _views(_blueprint_rows(path))
-    assert set(views) == {
+    assert set(_views(path)) == {
         "World: physics, labels, world-model beliefs",
         "Robots' joints",
         "Device events",
