@@ -31,11 +31,11 @@ from ._framing import scene_points as scene_points
 from ._inspect import RecordingFacts as RecordingFacts
 from ._inspect import cut_recording as cut_recording
 from ._inspect import inspect_recording as inspect_recording
-from ._inspect import recorded_eye as recorded_eye
-from ._inspect import recorded_views as recorded_views
 from ._mission import CallText as CallText
 from ._mission import MissionRecording as MissionRecording
 from ._mission import step_text as step_text
+from ._recorded import recorded_eye as recorded_eye
+from ._recorded import recorded_views as recorded_views
 from ._scene import Label as Label
 from ._scene import SceneLayout as SceneLayout
 from ._scene import record_scene as record_scene

@@ -38,6 +38,7 @@ from skill_agent.protocol import LogEntry, ParamSpec
 from task_agent.discovery import agents_from_view
 from task_agent.protocol import (
     Planned,
+    PlannedStep,
     Replanning,
     StepFinished,
     StepProgress,
@@ -223,7 +224,7 @@ class MissionRecording:
                 f"| {s.index} | {s.agent} | `{call}` | {after} | {s.start:.1f} | {s.finish:.1f} |"
             )
             nodes.append(str(s.index))
-            labels.append(f"{s.index} {s.agent}: {s.skill}")
+            labels.append(_node_label(s))
             edges += [(str(before), str(s.index)) for before in s.after]
         self.rec.log("task/plan", rr.TextDocument("\n".join(lines), media_type="text/markdown"))
         if nodes:
@@ -244,18 +245,26 @@ class MissionRecording:
         return [*fixed, *per_robot, *self.agents.entities(), *ghosts]
 
 
-_COLUMN, _ROW = 120.0, 45.0  # graph units between a lane's steps, between lanes
+# the plan graph's spacing, in graph units: between lanes, per label character, between steps
+_ROW, _CHAR, _GAP = 45.0, 7.5, 40.0
 
 
 def _swimlanes(event: Planned) -> dict[int, tuple[float, float]]:
     """Where each step of a plan is drawn: one row per agent (in order of their first step),
-    each agent's steps left to right in the order they are planned to start."""
+    each agent's steps left to right in the order they are planned to start, as far apart as
+    the longest label needs."""
     steps = sorted(event.steps, key=lambda s: (s.start, s.index))
     lanes = list(dict.fromkeys(s.agent for s in steps))
+    longest = max((len(_node_label(s)) for s in steps), default=0)
+    column = longest * _CHAR + _GAP
     done: dict[str, int] = {}
     out: dict[int, tuple[float, float]] = {}
     for s in steps:
-        column = done.get(s.agent, 0)
-        done[s.agent] = column + 1
-        out[s.index] = (column * _COLUMN, lanes.index(s.agent) * _ROW)
+        n = done.get(s.agent, 0)
+        done[s.agent] = n + 1
+        out[s.index] = (n * column, lanes.index(s.agent) * _ROW)
     return out
+
+
+def _node_label(step: PlannedStep) -> str:
+    return f"{step.index} {step.agent}: {step.skill}"
