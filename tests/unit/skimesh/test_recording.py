@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import pytest
 import rerun as rr
 import rerun.chunk
@@ -28,10 +27,9 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
-from wm_store import InMemoryTransport, WmClient, describe_change
-from wm_store.ontology import Ontology
+from tests.unit.wm_store.stores import memory_client
+from wm_store import WmClient, describe_change
 from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
-from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 LABELS = {"KitBox-1": "kit", "Gear-1": "gear"}
@@ -66,13 +64,8 @@ def test_a_change_is_one_line_with_its_revision_and_author() -> None:
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 @pytest.mark.anyio

@@ -8,7 +8,6 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import numpy as np
 import pytest
 import rerun as rr
@@ -17,24 +16,18 @@ import rerun.chunk
 from scenario import load_scenario
 from scenario.wm import scenario_ops
 from skimesh.recording import MissionRecording
-from wm_store import InMemoryTransport, WmClient
-from wm_store.ontology import Ontology
+from tests.unit.wm_store.stores import memory_client
+from wm_store import WmClient
 from wm_store.protocol import Orientation, Pose, Position, RemoveElement, UpdateElement
 from wm_store.reasoners import SpatialReasoner
-from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 def ghosts(path: Path) -> dict[str, list[tuple[float, np.ndarray | None]]]:
