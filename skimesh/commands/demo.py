@@ -15,15 +15,19 @@ sessions close and the recording is flushed; a second Ctrl-C stops at once).
 
 Recording (rerun): ``run.rrd`` in the current directory by default (``--rrd``): the 3-D scene
 over time, each robot's active skill and progress, task events, replans, the plan, every
-world-model change (:mod:`skimesh.recording`). ``--rerun-connect URL`` also streams to a running
-viewer; ``--rerun-serve`` serves the recording on 127.0.0.1 for a viewer to connect to later
-(the command then waits for Ctrl-C after the summary).
+world-model change, labels on robots and objects, where the world model believes each object
+is (ghosts), and with ``--images`` the scenario's cameras (rendered headless through EGL;
+without EGL the run goes on without images); the default layout frames the robots and the
+work (:mod:`skimesh.recording`). ``--rerun-connect URL`` also streams to a running viewer;
+``--rerun-serve`` serves the recording on 127.0.0.1 for a viewer to connect to later (the
+command then waits for Ctrl-C after the summary).
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import tempfile
@@ -83,6 +87,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--rerun-serve", action="store_true", help="serve the recording on "
                    "127.0.0.1 for a viewer to connect later")  # fmt: skip
     p.add_argument("--rerun-port", type=int, default=9876, help="port of --rerun-serve")
+    p.add_argument("--images", action="store_true", help="also record the scenario's camera "
+                   "images (rendered headless through EGL; none without EGL)")  # fmt: skip
     p.add_argument("--port", type=int, default=0, help="router port on 127.0.0.1 (default: free)")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated sensor noise")
     p.add_argument("--max-replans", type=int, default=5, metavar="N",
@@ -101,23 +107,20 @@ def mission_goal(scenario: Scenario) -> str:
     return " and ".join([*scenario.goals, *tidy])
 
 
-def _recorder(args: argparse.Namespace, rrd: Path, robots: list[str]) -> Recorder:
-    """The world's recorder, writing ``rrd`` (and streaming / serving when asked), with the
-    viewer layout of :mod:`skimesh.recording` (the scene, task events, each robot's progress)."""
+def _recorder(args: argparse.Namespace, rrd: Path) -> Recorder:
+    """The world's recorder, writing ``rrd`` (and streaming / serving when asked); the demo
+    sends the viewer layout once the world is built (:func:`skimesh.recording.record_scene`)."""
     import rerun as rr
 
     from mujoco_sim.recording import Recorder
 
-    from ..recording import blueprint
-
-    recorder = Recorder(application="skimesh-demo")
+    recorder = Recorder(application="skimesh-demo", images=args.images)
     sinks: list[Any] = [rr.FileSink(str(rrd))]
     if args.rerun_connect:
         sinks.append(rr.GrpcSink(args.rerun_connect))
     if args.rerun_serve:
         sinks.append(rr.GrpcServerSink(bind_ip="127.0.0.1", port=args.rerun_port))
     recorder.rec.set_sinks(*sinks)
-    recorder.rec.send_blueprint(blueprint(robots=robots))
     return recorder
 
 
@@ -158,6 +161,7 @@ def _setup(args: argparse.Namespace, data: Path) -> DemoSetup:
         max_replans=args.max_replans,
         planner_timeout=args.planner_timeout,
         deadline=args.deadline,
+        images=args.images,
     )
 
 
@@ -168,6 +172,9 @@ def _run(args: argparse.Namespace) -> int:
     from ..errors import DemoError
 
     _quiet_services(args.verbose)
+    if args.images:  # before mujoco is imported: headless OpenGL through EGL
+        os.environ.setdefault("MUJOCO_GL", "egl")
+        os.environ.setdefault("EGL_PLATFORM", "surfaceless")
     with tempfile.TemporaryDirectory(prefix="skimesh-demo-") as tmp:
         try:
             setup = _setup(args, Path(args.data).resolve() if args.data else Path(tmp))
@@ -175,7 +182,7 @@ def _run(args: argparse.Namespace) -> int:
             print(f"skimesh demo: {e}", file=sys.stderr)
             return EXIT_SETUP
         setup.rrd.parent.mkdir(parents=True, exist_ok=True)
-        recorder = _recorder(args, setup.rrd, [c.robot_label for c in setup.agents.values()])
+        recorder = _recorder(args, setup.rrd)
         return anyio.run(_main, args, setup, recorder)
 
 

@@ -5,8 +5,10 @@ time (or ``--fast``), serves every device on ``devices/<owner>/<device>/{cmd,sta
 world's ground truth on ``sim/truth`` (:mod:`device_drivers.truth`: where the objects really
 are, appliance states, the simulated time; what the task agent checks goals against), records
 the run with rerun (``--rerun FILE``, default ``sim.rrd``; ``--no-rerun``; ``--rerun-connect
-URL`` streams to a viewer), and stops cleanly on SIGINT/SIGTERM, on ``--duration`` simulated
-seconds, or when the simulation diverges (exit code 1).
+URL`` streams to a viewer; ``--images`` adds the cameras' images; the default layout of
+:mod:`skimesh.recording` frames the robots and the work and labels them), and stops cleanly
+on SIGINT/SIGTERM, on ``--duration`` simulated seconds, or when the simulation diverges (exit
+code 1).
 """
 
 from __future__ import annotations
@@ -85,6 +87,10 @@ def _run(args: argparse.Namespace) -> int:
         try:
             async with open_mesh(mesh_config_from_args(args)) as mesh:
                 world = await SimWorld.create(scenario, options, recorder)
+                if recorder is not None:  # the layout framed on this world, and its labels
+                    from ..recording import record_scene
+
+                    await record_scene(recorder.rec, world, mission=False, images=args.images)
                 devices = sim_devices(world)
                 settle_heap()  # no full collections of the start-up heap (docs/benchmarks.md)
                 async with anyio.create_task_group() as tg:

@@ -26,7 +26,13 @@ from wm_store import WmClient, WmError, display_name
 from wm_store.protocol import Value
 
 from ..errors import DemoError
-from ..recording import CallText, MissionRecording, record_agent_events, step_text
+from ..recording import (
+    CallText,
+    MissionRecording,
+    record_agent_events,
+    record_scene,
+    step_text,
+)
 from ._mission import run_mission, summary_lines
 from ._output import MissionView
 from ._stack import StackOptions, background, demo_stack
@@ -51,6 +57,8 @@ class DemoSetup:
     max_replans: int = 5
     planner_timeout: float = 60.0
     deadline: float = 1800.0
+    images: bool = False
+    """Camera images recorded (the recorder renders them): their views in the layout."""
 
 
 SETUP_ERRORS: tuple[type[Exception], ...] = (
@@ -92,12 +100,13 @@ async def run_demo(setup: DemoSetup, recorder: Recorder, stop: anyio.Event) -> i
         port=setup.port,
     )
     live = _Live()
+    robots = {name: c.robot_label for name, c in setup.agents.items()}
     recording = MissionRecording(
         recorder.rec,
         sim_clock=live.sim_time,
         label_of=live.label_of,
         call_text=live.call_text,
-        robots={name: c.robot_label for name, c in setup.agents.items()},
+        robots=robots,
     )
 
     def say(text: str) -> None:
@@ -107,7 +116,13 @@ async def run_demo(setup: DemoSetup, recorder: Recorder, stop: anyio.Event) -> i
     say(f"scenario {scenario.name}: {scenario.description}")
     try:
         async with demo_stack(options, recorder, say=say, on_wm=live.watch(recording)) as stack:
-            live.world = stack.world
+            live.world = world = stack.world
+            # the default layout framed on this world, labels, and the world model's beliefs
+            await record_scene(
+                recorder.rec, world, robots=list(robots.values()), images=setup.images
+            )
+            believed = [*(r.name for r in scenario.robots), *world.facts.objects]
+            recording.follow_beliefs(believed, lambda: stack.wm.replica.state)
             goal = parse_goal(setup.goal, stack.wm)
             say(f"ready after {time.monotonic() - started:.1f} s; goal: {goal}")
             view = MissionView(sim_clock=live.sim_time, call_text=live.call_text, out=_print)

@@ -6,9 +6,14 @@
   world-model changes);
 - :func:`record_agent_events` follows the skill agents' event logs into it
   (:class:`AgentEventLines`, :func:`entry_line`, :func:`describe_ops`);
-- :func:`blueprint` is the viewer's layout; :func:`inspect_recording`, :func:`frame`,
-  :func:`cut_recording` and :func:`scene_points` read a finished ``.rrd`` and aim the camera
-  (:class:`RecordingFacts`, :class:`Eye`) for ``scripts/screenshot``, whose helper is
+- :func:`blueprint` is the viewer's default layout; :func:`record_scene` sends it framed on a
+  world (:func:`scene_layout`: :func:`frame` of :func:`scene_points`, :class:`Eye`) with
+  labels on its robots and objects (:class:`Label`, :class:`SceneLayout`);
+- :class:`BeliefLayer` draws where the world model believes each object is (ghosts under
+  ``belief/``; :meth:`MissionRecording.follow_beliefs`);
+- :func:`inspect_recording`, :func:`recorded_eye`, :func:`recorded_views` and
+  :func:`cut_recording` read a finished
+  ``.rrd`` (:class:`RecordingFacts`) for ``scripts/screenshot``, whose helper is
   ``python -m skimesh.recording`` (``--help``).
 
 Importing this package imports rerun: the command line imports it only when it records.
@@ -18,23 +23,33 @@ from ._agents import AgentEventLines as AgentEventLines
 from ._agents import describe_ops as describe_ops
 from ._agents import entry_line as entry_line
 from ._agents import record_agent_events as record_agent_events
-from ._blueprint import Eye as Eye
+from ._belief import BeliefLayer as BeliefLayer
 from ._blueprint import blueprint as blueprint
-from ._blueprint import frame as frame
-from ._blueprint import scene_points as scene_points
+from ._framing import Eye as Eye
+from ._framing import frame as frame
+from ._framing import scene_points as scene_points
 from ._inspect import RecordingFacts as RecordingFacts
 from ._inspect import cut_recording as cut_recording
 from ._inspect import inspect_recording as inspect_recording
 from ._mission import CallText as CallText
 from ._mission import MissionRecording as MissionRecording
 from ._mission import step_text as step_text
+from ._recorded import recorded_eye as recorded_eye
+from ._recorded import recorded_views as recorded_views
+from ._scene import Label as Label
+from ._scene import SceneLayout as SceneLayout
+from ._scene import record_scene as record_scene
+from ._scene import scene_layout as scene_layout
 
 __all__ = [
     "AgentEventLines",
+    "BeliefLayer",
     "CallText",
     "Eye",
+    "Label",
     "MissionRecording",
     "RecordingFacts",
+    "SceneLayout",
     "blueprint",
     "cut_recording",
     "describe_ops",
@@ -42,6 +57,10 @@ __all__ = [
     "frame",
     "inspect_recording",
     "record_agent_events",
+    "record_scene",
+    "recorded_eye",
+    "recorded_views",
+    "scene_layout",
     "scene_points",
     "step_text",
 ]

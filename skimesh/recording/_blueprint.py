@@ -1,58 +1,69 @@
-"""How a skimesh recording is laid out in the rerun viewer, and where its camera looks.
+"""How a skimesh recording is laid out in the rerun viewer.
 
-:func:`blueprint` is the layout: the 3-D world (large, top left), each robot's progress as a
-time series (top right), the task events as a text log (below), the side panels hidden and the
-``sim_time`` timeline selected. Send it with the recording (``rec.send_blueprint(blueprint(...))``)
-or save it as an ``.rbl`` file that the viewer loads next to an ``.rrd``
-(``rerun run.rrd layout.rbl``; the application ids must match). :func:`frame` aims the 3-D
-view's camera (:class:`Eye`) at a set of points, e.g. :func:`scene_points` of a MuJoCo world.
+:func:`blueprint` is the default layout of ``skimesh demo`` and ``skimesh sim --rerun``::
+
+    +--------------------------------------+-----------------------+
+    |                                      | Plan (graph)          |
+    |  World: physics, labels, beliefs     +-----------------------+
+    |  (camera framed on the robots and    | Progress per robot    |
+    |   the work: :func:`frame`)           +-----------------------+
+    |                                      | Cameras (--images)    |
+    +-------------+-------------------+----+-----------------------+
+    | Task events | World-model       | Agents' logs | Robots' steps |
+    | (demo log)  | changes           |   (tabs)                     |
+    +-------------+-------------------+------------------------------+
+
+The 3-D view shows ``world/**`` (the physics, with a label over each robot and object) and
+``belief/**`` (where the world model believes each object is: cyan wireframe ghosts), each
+toggled by its entity path in the viewer's blueprint panel. The side panels are hidden and
+the ``sim_time`` timeline selected. Send it with the recording
+(``rec.send_blueprint(blueprint(...))``) or save it as an ``.rbl`` file that the viewer loads
+next to an ``.rrd`` (``rerun run.rrd layout.rbl``; the application ids must match).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any, Literal
 
-import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-__all__ = ["TIMELINE", "Eye", "Vec", "blueprint", "frame", "scene_points"]
+from ._framing import Eye
+
+__all__ = ["BELIEF", "TIMELINE", "WORLD", "blueprint", "camera_entity"]
 
 TIMELINE = "sim_time"
+WORLD = "world"
+"""The physics: the recorder's bodies (``world/<body>``), each label ``world/<body>/label``."""
+BELIEF = "belief"
+"""The world model's beliefs: ``belief/<label>``, a ghost per object."""
 _PLOT_SECONDS = 30.0  # s of progress shown, up to the time cursor
-_FOV_Y = 55.0  # degrees: the vertical field of view of rerun's 3-D views
 _ROBOT_COLORS = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189)]
-_GEOM_PLANE = 0  # mujoco.mjtGeom.mjGEOM_PLANE (the model's arrays are read without mujoco)
-Vec = np.ndarray[Any, Any]
 
 
-@dataclass(frozen=True)
-class Eye:
-    """Where the 3-D view's camera is and what it looks at (world coordinates, metres)."""
-
-    position: tuple[float, float, float]
-    look_target: tuple[float, float, float]
+def camera_entity(camera: str) -> str:
+    """The entity of a camera's images (the recorder's name for a MuJoCo camera)."""
+    return "cameras/" + camera.replace("/", ".")
 
 
-def blueprint(
-    *,
-    robots: Sequence[str] = (),
-    colors: Mapping[str, tuple[int, int, int]] | None = None,
-    eye: Eye | None = None,
-    play_state: Literal["following", "paused", "playing"] = "following",
-) -> rrb.Blueprint:
-    """The viewer layout of a skimesh recording.
+def _text_log(name: str, contents: Sequence[str], *, paths: bool) -> rrb.TextLogView:
+    return rrb.TextLogView(
+        origin="/",
+        contents=[f"+ {c}" for c in contents],
+        name=name,
+        columns=rrb.TextLogColumns(
+            timeline_columns=[rrb.encodings.TimelineColumn(TIMELINE)],
+            text_log_columns=[
+                rrb.encodings.TextLogColumn("loglevel", visible=False),
+                rrb.encodings.TextLogColumn("entitypath", visible=paths),
+                rrb.encodings.TextLogColumn("body"),
+            ],
+        ),
+    )
 
-    ``robots``: the robot (and appliance) names of ``robots/<name>/progress``, one line each
-    in the progress plot (none: the plot shows ``robots/**``, joints included), coloured as
-    ``colors`` says (the robot's arm colour in the 3-D view; else a palette's). ``eye``: the
-    3-D camera (none: the viewer fits the whole scene, floor included). ``play_state``:
-    ``following`` (the time cursor at the newest data: right for a live run and for a
-    screenshot of a recording cut at the moment to show), ``paused`` or ``playing``.
-    """
+
+def _world(eye: Eye | None) -> rrb.Spatial3DView:
     controls = None
     if eye is not None:
         controls = rrb.EyeControls3D(
@@ -61,9 +72,10 @@ def blueprint(
             look_target=eye.look_target,
             eye_up=(0.0, 0.0, 1.0),
         )
-    world = rrb.Spatial3DView(
-        origin="world",
-        name="World (MuJoCo)",
+    return rrb.Spatial3DView(
+        origin="/",
+        contents=[f"+ {WORLD}/**", f"+ {BELIEF}/**"],
+        name="World: physics, labels, world-model beliefs",
         eye_controls=controls,
         line_grid=rrb.LineGrid3D(visible=False),
         background=(38, 42, 50, 255),
@@ -71,26 +83,10 @@ def blueprint(
         defaults=[rr.Capsules3D.from_fields(fill_mode="solid")],
     )
 
-    def text_log(origin: str, name: str, *, paths: bool) -> rrb.TextLogView:
-        return rrb.TextLogView(
-            origin=origin,
-            name=name,
-            columns=rrb.TextLogColumns(
-                timeline_columns=[rrb.encodings.TimelineColumn(TIMELINE)],
-                text_log_columns=[
-                    rrb.encodings.TextLogColumn("loglevel", visible=False),
-                    rrb.encodings.TextLogColumn("entitypath", visible=paths),
-                    rrb.encodings.TextLogColumn("body"),
-                ],
-            ),
-        )
 
-    # the task's events in front; each agent's event log (agents/<agent>/events) behind them
-    events = rrb.Tabs(
-        text_log("task/events", "Task events", paths=False),
-        text_log("agents", "Agents' event logs", paths=True),
-        active_tab=0,
-    )
+def _progress(
+    robots: Sequence[str], colors: Mapping[str, tuple[int, int, int]] | None
+) -> rrb.TimeSeriesView:
     overrides: dict[Any, Any] = {}  # entity path -> visualizer
     if robots:
         contents: list[str] = []
@@ -106,10 +102,10 @@ def blueprint(
             ).visualizer()
     else:
         contents = ["+ robots/**"]  # a recording without a mission: the robots' joints
-    progress = rrb.TimeSeriesView(
+    return rrb.TimeSeriesView(
         origin="/",
         contents=contents,
-        name="Progress of each robot's step" if robots else "Robots",
+        name="Progress of each robot's step" if robots else "Robots' joints",
         # The last half minute up to the time cursor (a window that scrolls with a live run;
         # the whole run is a barcode of steps).
         axis_x=rrb.TimeAxis(
@@ -118,14 +114,65 @@ def blueprint(
                 end=rrb.TimeRangeBoundary.cursor_relative(seconds=1.0),
             )
         ),
-        axis_y=rrb.ScalarAxis(range=(0.0, 1.05), zoom_lock=True),
+        axis_y=rrb.ScalarAxis(range=(0.0, 1.05), zoom_lock=True) if robots else None,
         plot_legend=rrb.PlotLegend(corner="LeftTop"),
         overrides=overrides or None,
     )
+
+
+def blueprint(
+    *,
+    robots: Sequence[str] = (),
+    colors: Mapping[str, tuple[int, int, int]] | None = None,
+    eye: Eye | None = None,
+    cameras: Sequence[str] = (),
+    mission: bool = True,
+    play_state: Literal["following", "paused", "playing"] = "following",
+) -> rrb.Blueprint:
+    """The viewer layout of a skimesh recording (see the module doc).
+
+    ``robots``: the robot (and appliance) names of ``robots/<name>/progress``, one line each
+    in the progress plot (none: the plot shows ``robots/**``, joints included), coloured as
+    ``colors`` says (the robot's arm colour in the 3-D view; else a palette's). ``eye``: the
+    3-D camera (none: the viewer fits the whole scene, floor included; :func:`frame` of
+    :func:`scene_points` frames the robots and the work). ``cameras``: the MuJoCo cameras
+    whose images are recorded (``cameras/<name>``), one tab each. ``mission``: the plan and
+    the mission's logs (``skimesh demo``); without, the device events of ``skimesh sim``.
+    ``play_state``: ``following`` (the time cursor at the newest data: right for a live run
+    and for a screenshot of a recording cut at the moment to show), ``paused`` or
+    ``playing``.
+    """
+    side: list[Any] = []
+    if mission:
+        side.append(
+            rrb.GraphView(origin="task/plan/graph", name="Plan (arrows: must finish first)")
+        )
+    side.append(_progress(robots, colors))
+    if cameras:
+        views = [rrb.Spatial2DView(origin=camera_entity(c), name=c) for c in cameras]
+        side.append(rrb.Tabs(*views, active_tab=0) if len(views) > 1 else views[0])
+    if mission:
+        logs: list[Any] = [
+            _text_log("Task events", ["task/events", "demo/log"], paths=False),
+            _text_log("World-model changes", ["world_model/changes"], paths=False),
+            rrb.Tabs(
+                _text_log("Agents' logs", ["agents/**"], paths=True),
+                _text_log("Robots' steps", ["robots/**"], paths=True),
+                active_tab=0,
+            ),
+        ]
+        shares = [2.0, 2.0, 3.0]
+    else:
+        logs = [_text_log("Device events", ["events/**"], paths=True)]
+        shares = [1.0]
     return rrb.Blueprint(
         rrb.Vertical(
-            rrb.Horizontal(world, progress, column_shares=[5, 2]),
-            events,
+            rrb.Horizontal(
+                _world(eye),
+                rrb.Vertical(*side) if len(side) > 1 else side[0],
+                column_shares=[3, 2],
+            ),
+            rrb.Horizontal(*logs, column_shares=shares),
             row_shares=[7, 3],
         ),
         rrb.TopPanel(state="hidden"),
@@ -134,70 +181,3 @@ def blueprint(
         rrb.TimePanel(state="collapsed", timeline=TIMELINE, play_state=play_state),
         auto_views=False,
     )
-
-
-def frame(
-    points: Vec,
-    *,
-    azimuth: float = 225.0,
-    elevation: float = 38.0,
-    fill: float = 0.9,
-    aspect: float = 1.9,
-    fov_y: float = _FOV_Y,
-) -> Eye:
-    """A camera that frames ``points`` (n x 3, world coordinates; e.g.
-    :meth:`RecordingFacts.corners` or :func:`scene_points`): looking from ``azimuth`` degrees
-    (0: from +x, counter-clockwise seen from above) and ``elevation`` degrees above the
-    horizon, the points centred and filling ``fill`` of a view of ``aspect`` (width / height)
-    with a vertical field of view of ``fov_y`` degrees."""
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    center = (points.min(axis=0) + points.max(axis=0)) / 2
-    az, el = math.radians(azimuth), math.radians(elevation)
-    back = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    right = np.cross(-back, [0.0, 0.0, 1.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, -back)
-    tan_y = math.tan(math.radians(fov_y) / 2) * fill
-    tan_x = tan_y * aspect
-
-    def fit(center: Vec) -> tuple[float, float, float]:
-        """The distance at which every point is in view, and how far off centre (right,
-        up) the points' picture is then, per unit of depth."""
-        v = points - center
-        # seen from center + distance * back, a point is at depth distance - v.back; it is
-        # in view if |v.up| <= depth * tan_y and |v.right| <= depth * tan_x
-        along, x, y = v @ back, v @ right, v @ up
-        distance = max(0.5, float(np.max(along + np.maximum(abs(y) / tan_y, abs(x) / tan_x))))
-        depth = distance - along
-        mid_x = float(np.max(x / depth) + np.min(x / depth)) / 2
-        mid_y = float(np.max(y / depth) + np.min(y / depth)) / 2
-        return distance, mid_x, mid_y
-
-    for _ in range(3):  # centre the picture on the points, then fit them
-        distance, mid_x, mid_y = fit(center)
-        center = center + distance * (mid_x * right + mid_y * up)
-    distance, _, _ = fit(center)
-    position = center + distance * back
-    return Eye(
-        position=(float(position[0]), float(position[1]), float(position[2])),
-        look_target=(float(center[0]), float(center[1]), float(center[2])),
-    )
-
-
-def scene_points(model: Any, data: Any) -> Vec:
-    """Points around every visible geom of a MuJoCo world but its floor (the corners of each
-    geom's bounding cube), for :func:`frame`: ``blueprint(eye=frame(scene_points(m, d)))``
-    frames a world when its recording starts. Call it after ``mj_forward``."""
-    seen = [
-        g
-        for g in range(model.ngeom)
-        if model.geom_rgba[g, 3] > 0 and model.geom_type[g] != _GEOM_PLANE
-    ]
-    if not seen:
-        return np.zeros((1, 3))
-    center = np.asarray(data.geom_xpos)[seen]
-    radius = np.asarray(model.geom_rbound)[seen][:, None]
-    cube = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).T.reshape(-1, 3)
-    points = (center[:, None, :] + radius[:, None, :] * cube[None, :, :]).reshape(-1, 3)
-    points[:, 2] = np.maximum(points[:, 2], 0.0)
-    return np.asarray(points, dtype=float)

@@ -1,10 +1,12 @@
 """Reading a finished skimesh ``.rrd``: what it holds, the moment to show, a copy cut there.
 
-:func:`inspect_recording` reads a recording (its application id, its robots, where things are,
-and a moment where something happens: a part in the air, robots moving);
-:func:`cut_recording` ends a copy of the recording at a moment, so that ``scripts/screenshot``
-can show it with the layout of :func:`~skimesh.recording.blueprint`. :func:`main` is that
-script's helper, ``python -m skimesh.recording`` (``--help``).
+:func:`inspect_recording` reads a recording (its application id, its robots, cameras, where
+things are, the camera of the layout it was recorded with, and a moment where something
+happens: a part in the air, robots moving); :func:`cut_recording` ends a copy of the recording
+at a moment, so that ``scripts/screenshot`` can show it with its default layout
+(:func:`~skimesh.recording.blueprint` with the recorded camera: the viewer cannot be handed the
+layout inside the ``.rrd`` together with a cut copy). :func:`main` is that script's helper,
+``python -m skimesh.recording`` (``--help``).
 """
 
 from __future__ import annotations
@@ -19,7 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from ._blueprint import TIMELINE, Vec, blueprint, frame
+from ._blueprint import TIMELINE, blueprint
+from ._framing import Eye, Vec, frame
+from ._recorded import recorded_eye, recorded_views
 
 __all__ = ["RecordingFacts", "cut_recording", "inspect_recording", "main"]
 
@@ -50,6 +54,14 @@ class RecordingFacts:
     """Each body's origin over time (a body that never moves: one sample at time 0)."""
     extents: dict[str, tuple[Vec, Vec]]
     """The box around each body's geometry in its own frame (rotations ignored)."""
+    eye: Eye | None = None
+    """The 3-D camera of the layout sent with the recording (its last), if any."""
+    views: dict[str, tuple[str, str]] | None = None
+    """The views of the layouts sent with the recording: name -> (kind, origin)."""
+    cameras: list[str] | None = None
+    """The cameras with images (``cameras/<name>``)."""
+    mission: bool = False
+    """Whether it records a mission (``task/...``: ``skimesh demo``), not the world alone."""
 
     def corners(self, at: float | None = None) -> Vec:
         """The corners of the box around each body's geometry (the floor excluded) at time
@@ -128,10 +140,15 @@ def inspect_recording(path: str | Path) -> RecordingFacts:
     still: dict[str, np.ndarray[Any, Any]] = {}
     tracks: dict[str, list[tuple[np.ndarray[Any, Any], np.ndarray[Any, Any]]]] = defaultdict(list)
     end = 0.0
+    cameras: set[str] = set()
+    mission = False
     for chunk in reader.stream(store=recordings[0]):
         parts = str(chunk.entity_path).strip("/").split("/")
         if len(parts) == 3 and parts[0] == "robots" and parts[2] == "progress":
             robots.add(parts[1])
+        if len(parts) == 2 and parts[0] == "cameras":
+            cameras.add(parts[1])
+        mission = mission or parts[0] == "task"
         batch = chunk.to_record_batch()
         names = list(batch.schema.names)
         if TIMELINE in names and not chunk.is_static:
@@ -185,6 +202,10 @@ def inspect_recording(path: str | Path) -> RecordingFacts:
         why=why,
         bodies=bodies,
         extents=extent,
+        eye=recorded_eye(reader),
+        views=recorded_views(reader),
+        cameras=sorted(cameras),
+        mission=mission,
     )
 
 
@@ -257,17 +278,13 @@ def cut_recording(path: str | Path, moment: float, out: str | Path) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m skimesh.recording RUN.rrd [--rbl OUT.rbl] [--cut OUT.rrd] [--at S]``: print
     what the recording holds and the moment to show (``moment=<seconds>`` on the last line);
-    ``--rbl``: save the blueprint for it (the camera aimed at its bodies); ``--cut``: save the
-    recording up to that moment."""
+    ``--rbl``: save its default layout (the camera it was recorded with; a recording without
+    one: framed on its bodies at the start); ``--cut``: save the recording up to that moment."""
     p = argparse.ArgumentParser(prog="python -m skimesh.recording", description=main.__doc__)
     p.add_argument("rrd", type=Path, help="a skimesh recording")
     p.add_argument("--rbl", type=Path, help="write the blueprint here (.rbl)")
     p.add_argument("--at", type=float, help="show this sim_time (s) instead of the busiest one")
     p.add_argument("--cut", type=Path, help="write the recording up to the moment here (.rrd)")
-    p.add_argument("--azimuth", type=float, default=225.0, help="camera azimuth, degrees")
-    p.add_argument("--elevation", type=float, default=38.0, help="camera elevation, degrees")
-    p.add_argument("--fill", type=float, default=0.9, help="part of the 3-D view the scene fills")
-    p.add_argument("--aspect", type=float, default=1.9, help="3-D view's width / height")
     args = p.parse_args(argv)
     try:
         facts = inspect_recording(args.rrd)
@@ -278,20 +295,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.at is not None:
         moment, why = min(max(args.at, 0.0), facts.end), "asked for"
     if args.rbl is not None:
-        eye = frame(
-            facts.corners(moment),
-            azimuth=args.azimuth,
-            elevation=args.elevation,
-            fill=args.fill,
-            aspect=args.aspect,
+        layout = blueprint(
+            robots=facts.robots,
+            colors=facts.colors,
+            eye=facts.eye or frame(facts.corners(0.0)),
+            cameras=facts.cameras or (),
+            mission=facts.mission,
         )
-        layout = blueprint(robots=facts.robots, colors=facts.colors, eye=eye)
         layout.save(facts.application_id, args.rbl)
     if args.cut is not None:
         cut_recording(args.rrd, moment, args.cut)
     print(f"application={facts.application_id}")
     print(f"robots={','.join(facts.robots)}")
     print(f"colors={facts.colors}")
+    print(f"cameras={','.join(facts.cameras or [])}")
+    print(f"eye={'recorded' if facts.eye else 'framed on the bodies'}")
+    print(f"views={'; '.join(sorted(facts.views or {}))}")
     print(f"end={facts.end:.3f}")
     print(f"why={why}")
     print(f"moment={moment:.3f}")

@@ -10,10 +10,13 @@ skills' code. Entities::
 
     task/events              TextLog: one line per task event (replans WARN, failures ERROR)
     task/plan                TextDocument (markdown): the plan's steps and partial order
-    task/plan/graph          GraphNodes + GraphEdges: steps, and "must finish first" edges
+    task/plan/graph          GraphNodes + GraphEdges: steps, and "must finish first" edges;
+                             one row per agent, its steps left to right in planned order
     robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
     robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
     world_model/changes      TextLog: one line per committed transaction (revision + summary)
+    belief/<label>           Boxes3D: where the world model believes each object is
+                             (:class:`BeliefLayer`, once :meth:`MissionRecording.follow_beliefs`)
     agents/<agent>/events    TextLog: the agent's event log: runs started, results, refused
                              starts, world-model writes (:func:`record_agent_events`)
     demo/log                 TextLog: the demo's own lines (start-up, verification, summary)
@@ -35,6 +38,7 @@ from skill_agent.protocol import LogEntry, ParamSpec
 from task_agent.discovery import agents_from_view
 from task_agent.protocol import (
     Planned,
+    PlannedStep,
     Replanning,
     StepFinished,
     StepProgress,
@@ -48,8 +52,10 @@ from wm_store.protocol import (
     Change,
     Value,
 )
+from wm_store.scene import SceneState
 
 from ._agents import AgentEventLines
+from ._belief import BeliefLayer
 
 __all__ = ["CallText", "MissionRecording", "step_text"]
 
@@ -112,6 +118,8 @@ class MissionRecording:
         self.robots = dict(robots or {})
         self._t0 = time.monotonic()
         self._steps: dict[int, str] = {}
+        self.beliefs: BeliefLayer | None = None
+        self._state: Callable[[], SceneState] | None = None
         self.agents = AgentEventLines(
             rec,
             sim_clock=sim_clock,
@@ -136,9 +144,20 @@ class MissionRecording:
         self.rec.log("demo/log", rr.TextLog(text, level=level))
 
     def wm_change(self, change: Change) -> None:
-        """One world-model change (call it from the client's change callback)."""
+        """One world-model change (call it from the client's change callback, which runs
+        after the replica applied it): its line, and the ghosts it moved."""
         self._now()
         self.rec.log("world_model/changes", rr.TextLog(describe_change(change, self.label_of)))
+        if self.beliefs is not None and self._state is not None:
+            self.beliefs.update(self._state())
+
+    def follow_beliefs(self, labels: Iterable[str], state: Callable[[], SceneState]) -> None:
+        """From now on, show where the world model (``state()``: the replica's state) believes
+        the elements labelled ``labels`` are (:class:`BeliefLayer`); logs them now, then after
+        every change :meth:`wm_change` sees."""
+        self.beliefs, self._state = BeliefLayer(self.rec, labels), state
+        self._now()
+        self.beliefs.update(state())
 
     def agent_entry(self, entry: LogEntry) -> None:
         """One entry of an agent's event log (buffered; progress is left out)."""
@@ -197,6 +216,7 @@ class MissionRecording:
         ]
         nodes, labels = [], []
         edges: list[tuple[str, str]] = []
+        positions = _swimlanes(event)
         for s in sorted(event.steps, key=lambda s: (s.start, s.index)):
             call = self.call_text(s.agent, s.skill, s.params)
             after = ", ".join(map(str, s.after)) or "-"
@@ -204,11 +224,12 @@ class MissionRecording:
                 f"| {s.index} | {s.agent} | `{call}` | {after} | {s.start:.1f} | {s.finish:.1f} |"
             )
             nodes.append(str(s.index))
-            labels.append(f"{s.index} {s.agent}: {s.skill}")
+            labels.append(_node_label(s))
             edges += [(str(before), str(s.index)) for before in s.after]
         self.rec.log("task/plan", rr.TextDocument("\n".join(lines), media_type="text/markdown"))
         if nodes:
-            self.rec.log("task/plan/graph", rr.GraphNodes(nodes, labels=labels))
+            where = [positions[int(n)] for n in nodes]
+            self.rec.log("task/plan/graph", rr.GraphNodes(nodes, labels=labels, positions=where))
             self.rec.log("task/plan/graph", rr.GraphEdges(edges, graph_type="directed"))
         return (
             f"plan {event.attempt}: {len(event.steps)} steps, estimated makespan "
@@ -220,4 +241,30 @@ class MissionRecording:
         """The entity paths this class writes (for checks)."""
         fixed = ["task/events", "task/plan", "world_model/changes", "demo/log"]
         per_robot = [f"robots/{r}/{k}" for r in self.robots.values() for k in ("skill", "progress")]
-        return [*fixed, *per_robot, *self.agents.entities()]
+        ghosts = [] if self.beliefs is None else map(BeliefLayer.entity, self.beliefs.shown)
+        return [*fixed, *per_robot, *self.agents.entities(), *ghosts]
+
+
+# the plan graph's spacing, in graph units: between lanes, per label character, between steps
+_ROW, _CHAR, _GAP = 45.0, 7.5, 40.0
+
+
+def _swimlanes(event: Planned) -> dict[int, tuple[float, float]]:
+    """Where each step of a plan is drawn: one row per agent (in order of their first step),
+    each agent's steps left to right in the order they are planned to start, as far apart as
+    the longest label needs."""
+    steps = sorted(event.steps, key=lambda s: (s.start, s.index))
+    lanes = list(dict.fromkeys(s.agent for s in steps))
+    longest = max((len(_node_label(s)) for s in steps), default=0)
+    column = longest * _CHAR + _GAP
+    done: dict[str, int] = {}
+    out: dict[int, tuple[float, float]] = {}
+    for s in steps:
+        n = done.get(s.agent, 0)
+        done[s.agent] = n + 1
+        out[s.index] = (n * column, lanes.index(s.agent) * _ROW)
+    return out
+
+
+def _node_label(step: PlannedStep) -> str:
+    return f"{step.index} {step.agent}: {step.skill}"

@@ -1,5 +1,6 @@
 """Camera images in the recording: ``skimesh sim --images`` renders the scenario's cameras
-headless (EGL) and logs them to the ``.rrd`` beside the scene.
+headless (EGL) and logs them to the ``.rrd`` beside the scene, and its default layout shows
+them (one view per camera) beside the 3-D view and the device events.
 
 The simulator runs as its own process (EGL must be chosen before ``mujoco`` is imported, which
 this test process has already done), on a loopback router, for two simulated seconds of the
@@ -16,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rerun
+
+from skimesh.recording import recorded_views
 
 from .procs import ROOT
 
@@ -63,3 +66,9 @@ def test_sim_records_camera_images(tmp_path: Path, router_endpoint: str) -> None
     # a uniform 320 x 240 frame compresses to ~1.8 kB; the worktop scene (microwave, meal box,
     # the arm) to several times that
     assert all(len(jpeg) > 3 * UNIFORM_JPEG for jpeg in frames["/cameras/Camera-1"])
+    # the layout: the world, each camera, the device events; no mission, so no plan
+    views = recorded_views(rerun.chunk.RrdReader(rrd))
+    assert views["Camera-1"] == ("2D", "/cameras/Camera-1")
+    assert views["friend/wrist_camera"] == ("2D", "/cameras/friend.wrist_camera")
+    assert {"World: physics, labels, world-model beliefs", "Device events"} <= set(views)
+    assert not any(name.startswith("Plan") for name in views)

@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-import anyio
 import pytest
 import rerun as rr
 import rerun.chunk
@@ -28,10 +27,9 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
-from wm_store import InMemoryTransport, WmClient, describe_change
-from wm_store.ontology import Ontology
+from tests.unit.wm_store.stores import memory_client
+from wm_store import WmClient, describe_change
 from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
-from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
 LABELS = {"KitBox-1": "kit", "Gear-1": "gear"}
@@ -66,13 +64,8 @@ def test_a_change_is_one_line_with_its_revision_and_author() -> None:
 
 @pytest.fixture
 async def wm() -> AsyncIterator[WmClient]:
-    ontology = Ontology.default()
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as client:
-            yield client
-        tg.cancel_scope.cancel()
+    async with memory_client() as client:
+        yield client
 
 
 @pytest.mark.anyio
@@ -194,3 +187,38 @@ def test_task_events_go_to_the_task_log_the_plan_and_the_robots(tmp_path: Path) 
     assert skill[2] == "step 0 navigate FAILED (execution): blocked"
     assert texts["/world_model/changes"] == ["rev 3 by r1: no change"]
     assert texts["/demo/log"] == ["hello"]
+
+
+def test_the_plan_graph_has_a_row_per_agent_in_planned_order(tmp_path: Path) -> None:
+    def step(index: int, agent: str, start: float, after: list[int]) -> PlannedStep:
+        return PlannedStep(
+            index=index, agent=agent, skill="pick", params={}, after=after, start=start
+        )
+
+    steps = [step(0, "r1", 0.0, []), step(1, "r2", 0.0, []), step(2, "r1", 5.0, [0, 1])]
+    steps.append(step(3, "r2", 2.0, [1]))
+    path = tmp_path / "plan.rrd"
+    rec = rr.RecordingStream("skimesh-test")
+    rec.set_sinks(rr.FileSink(str(path)))
+    recording = MissionRecording(rec, sim_clock=lambda: 0.0, label_of=label_of)
+    recording.task_event(Planned(task_id="t", seq=1, stamp=0.0, steps=steps, planner="p"))
+    rec.flush()
+    rec.disconnect()
+    nodes: dict[str, tuple[float, float]] = {}
+    edges: list[tuple[str, str]] = []
+    for chunk in rerun.chunk.RrdReader(path).stream():
+        if str(chunk.entity_path) != "/task/plan/graph":
+            continue
+        batch = chunk.to_record_batch()
+        if "GraphNodes:positions" in batch.schema.names:
+            ids = batch.column("GraphNodes:node_ids").to_pylist()[0]
+            where = batch.column("GraphNodes:positions").to_pylist()[0]
+            nodes.update({n: (p[0], p[1]) for n, p in zip(ids, where, strict=True)})
+        if "GraphEdges:edges" in batch.schema.names:
+            edges += [
+                (e["first"], e["second"]) for e in batch.column("GraphEdges:edges").to_pylist()[0]
+            ]
+    # r1's row first (its first step starts first), each row left to right by planned start
+    assert nodes["0"][1] == nodes["2"][1] < nodes["1"][1] == nodes["3"][1]
+    assert nodes["0"][0] == nodes["1"][0] == 0.0 < nodes["3"][0] == nodes["2"][0]
+    assert sorted(edges) == [("0", "2"), ("1", "2"), ("1", "3")]
