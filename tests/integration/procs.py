@@ -147,6 +147,18 @@ class Child:
         return code
 
 
+def noop_agent(path: Path, name: str) -> Path:
+    """Write the config of an agent ``name`` with a robot of that label, a gripper and the
+    ``noop`` skill (``docs/examples/noop.py``) to ``path``; returns ``path``."""
+    noop = ROOT / "docs" / "examples" / "noop.py"
+    path.write_text(
+        f'name = "{name}"\n[robot]\ntype = "Robot"\nlabel = "{name}"\n'
+        f'[[devices]]\ntype = "Gripper"\nlabel = "{name}-gripper"\n'
+        f'[skills]\npaths = ["{noop}"]\n'
+    )
+    return path
+
+
 def start_store(endpoint: str, mesh: str, data_dir: Path) -> Child:
     child = Child(
         ["-m", "skimesh", "wm", "--connect", endpoint, "--mesh", mesh, "--data", str(data_dir)],

@@ -12,7 +12,6 @@ registration (the store refuses it by identity); and the store is unchanged thro
 
 from __future__ import annotations
 
-import textwrap
 import time
 import uuid
 from collections.abc import AsyncIterator, Iterator
@@ -31,12 +30,11 @@ from skimesh.secure import Component, SiteSecurity
 from wm_store import ForbiddenError, RobotRegistration, WmClient, ZenohTransport
 from wm_store.protocol import AddElement, RemoveElement, Transact, decode_change
 
-from .procs import ROOT, Child
+from .procs import Child, noop_agent
 from .test_security import start_router
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.anyio]
 
-NOOP = ROOT / "docs" / "examples" / "noop.py"
 COMPONENTS = (
     Component("wm", "wm"),
     Component("agents-host-a", "agent", {"r1": "r1"}),
@@ -73,22 +71,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SecureSite]:
     security.ensure()
     endpoint = f"tls/127.0.0.1:{free_port()}"
     site = SecureSite(endpoint, f"sec-{uuid.uuid4().hex[:8]}", security)
-    agent_toml = folder / "r1.toml"
-    agent_toml.write_text(
-        textwrap.dedent(
-            f"""
-            name = "r1"
-            [robot]
-            type = "Robot"
-            label = "r1"
-            [[devices]]
-            type = "Gripper"
-            label = "r1-gripper"
-            [skills]
-            paths = ["{NOOP}"]
-            """
-        )
-    )
+    agent_toml = noop_agent(folder / "r1.toml", "r1")
     router = start_router(security.router_config([endpoint]), endpoint)
     children: list[Child] = []
     try:

@@ -23,7 +23,6 @@ import secrets
 import socket
 import subprocess
 import sys
-import textwrap
 import time
 import uuid
 from collections.abc import AsyncIterator, Iterator
@@ -43,14 +42,13 @@ from skill_agent.client import AgentClient, find_skills, list_agents
 from wm_store import ForbiddenError, RobotRegistration, TransportError, WmClient, ZenohTransport
 from wm_store.protocol import AddElement, RemoveElement, Transact, UnsetRelation, UpdateElement
 
-from .procs import ROOT, Child
+from .procs import ROOT, Child, noop_agent
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.anyio]
 
 CONFIGS = ROOT / "configs" / "zenoh"
 MAKE_CERTS = ROOT / "scripts" / "make-test-certs"
 USERS = ("wm", "agent-r1", "agent-r2", "operator", "viewer")
-NOOP = ROOT / "docs" / "examples" / "noop.py"
 
 
 def from_template(name: str, out: Path, replace: dict[str, str]) -> Path:
@@ -123,22 +121,7 @@ def acl_site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[AclSite]:
     config = from_template(
         "router-acl.json5", folder / "router.json5", {"/etc/skimesh/zenoh/users.txt": str(users)}
     )
-    agent_toml = folder / "r1.toml"
-    agent_toml.write_text(
-        textwrap.dedent(
-            f"""
-            name = "r1"
-            [robot]
-            type = "Robot"
-            label = "r1"
-            [[devices]]
-            type = "Gripper"
-            label = "r1-gripper"
-            [skills]
-            paths = ["{NOOP}"]
-            """
-        )
-    )
+    agent_toml = noop_agent(folder / "r1.toml", "r1")
     router = start_router(config, site.endpoint)
     children: list[Child] = []
     try:
