@@ -1,0 +1,147 @@
+"""Pausing a run pauses its devices: the pausable drivers of the devices it holds (not those
+of another run, nor of a queued run), resumed with the run or when it ends; the deadline
+stops while paused; a run stopped while paused runs on_preempt unhindered; a device that
+fails to pause does not fail the pause."""
+
+from __future__ import annotations
+
+import time
+
+import anyio
+import pytest
+
+from device_drivers import DeviceUnavailableError
+from skill_agent import SkillContext
+from skill_agent.protocol import SkillDescription, StartRun
+from tests.assets.skills import Probe, Wait, entries
+from wm_store.protocol import Value
+
+from .conftest import AgentFactory, Kitting
+
+pytestmark = pytest.mark.anyio
+
+
+class Held:
+    """A pausable driver recording its calls."""
+
+    def __init__(self, name: str, *, broken: bool = False) -> None:
+        self.name, self.broken = name, broken
+        self.calls: list[str] = []
+
+    async def stop(self) -> None:
+        self.calls.append("stop")
+
+    async def pause(self) -> None:
+        self.calls.append("pause")
+        if self.broken:
+            raise DeviceUnavailableError(f"{self.name}: no answer")
+
+    async def resume(self) -> None:
+        self.calls.append("resume")
+
+
+class CheckingPreempt(Wait):
+    """``wait`` whose on_preempt passes a checkpoint (as a motion helper would)."""
+
+    description = SkillDescription(
+        name="checking_preempt",
+        doc="Waits; its on_preempt checks.",
+        parameters=Wait.description.parameters,
+    )
+
+    async def on_preempt(self, ctx: SkillContext) -> None:
+        await ctx.checkpoint()
+        self.probe.record(ctx.run_id, "on_preempt")
+
+
+def grippers(kitting: Kitting, **options: bool) -> tuple[Held, Held, dict[str, object]]:
+    left, right = Held("left", **options), Held("right")
+    return left, right, {kitting["left"]: left, kitting["right"]: right}
+
+
+async def test_pause_and_resume_reach_the_runs_devices_only(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    left, right, devices = grippers(kitting)
+    async with make_agent(entries(probe, Wait), devices=devices) as core:
+        started = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            await core.pause(started.run_id)
+            assert left.calls == ["pause"] and right.calls == []
+            await core.resume(started.run_id)
+            assert left.calls == ["pause", "resume"]
+            probe.open("release")
+            result = await core.wait(started.run_id)
+    assert result.success
+    assert left.calls == ["pause", "resume"] and right.calls == []
+
+
+async def test_the_deadline_stops_while_paused_and_counts_on_after(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    _, _, devices = grippers(kitting)
+    async with make_agent(entries(probe, Wait), devices=devices) as core:
+        params: dict[str, Value] = {"gripper": kitting["left"]}
+        started = await core.start(StartRun(skill="wait", params=params, timeout=0.5))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            await core.pause(started.run_id)
+            await anyio.sleep(1.0)  # twice the run's timeout, paused
+            assert core.status(started.run_id).result is None
+            resumed = time.monotonic()
+            await core.resume(started.run_id)
+            result = await core.wait(started.run_id)  # the gate stays shut: it times out
+    waited = time.monotonic() - resumed
+    assert result.reason == "timeout"
+    assert 0.1 < waited < 0.5 + 0.3  # the time left, not a fresh 0.5 s nor none
+
+
+async def test_a_run_stopped_while_paused_frees_its_devices_for_on_preempt(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    left, _, devices = grippers(kitting)
+    skills = entries(probe, CheckingPreempt)
+    async with make_agent(skills, devices=devices, preempt_timeout=2.0) as core:
+        params: dict[str, Value] = {"gripper": kitting["left"]}
+        started = await core.start(StartRun(skill="checking_preempt", params=params))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            await core.pause(started.run_id)
+            result = await core.stop(started.run_id)
+    assert result.reason == "preempted" and "on_preempt" not in result.message
+    assert probe.count("on_preempt", started.run_id) == 1
+    assert left.calls == ["pause", "resume"]  # released before on_preempt
+
+
+async def test_a_queued_run_paused_leaves_the_devices_of_the_run_ahead_alone(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    left, _, devices = grippers(kitting)
+    async with make_agent(entries(probe, Wait), devices=devices) as core:
+        params: dict[str, Value] = {"gripper": kitting["left"]}
+        first = await core.start(StartRun(skill="wait", params=params))
+        queued = await core.start(StartRun(skill="wait", params=params, queue=True))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            await core.pause(queued.run_id)
+            assert core.status(queued.run_id).state == "paused"
+            assert left.calls == []
+            await core.stop(queued.run_id)
+            await core.stop(first.run_id)
+
+
+async def test_a_device_that_cannot_pause_does_not_fail_the_pause(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe, caplog: pytest.LogCaptureFixture
+) -> None:
+    _, _, devices = grippers(kitting, broken=True)
+    async with make_agent(entries(probe, Wait), devices=devices) as core:
+        started = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            await core.pause(started.run_id)
+            assert core.status(started.run_id).state == "paused"
+            await core.resume(started.run_id)
+            probe.open("release")
+            assert (await core.wait(started.run_id)).success
+    assert "cannot pause left" in caplog.text
