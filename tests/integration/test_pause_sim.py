@@ -19,7 +19,7 @@ from device_drivers import Arm, BaseState, Gripper, MobileBase
 from device_drivers.remote import connect_devices, serve_devices
 from meshlink import open_mesh
 from mujoco_sim import sim_devices
-from skill_agent.protocol import Progress, RunResult, StartRun
+from skill_agent.protocol import RunResult, StartRun
 from skill_agent.runtime import AgentCore, SkillEntry
 from tests.conftest import MeshConfigFactory
 from tests.integration.test_skills_sim import KITTING, Sim, arm_speed, simulation, when
@@ -98,20 +98,24 @@ async def run_ok(core: AgentCore, skill: str, **params: Any) -> None:
     assert result.success, f"{skill}: {result.message}"
 
 
-async def test_a_paused_navigate_stops_the_base_and_resumes_to_its_goal(kitting: Sim) -> None:
-    sim = kitting
-    async with sim.agent("r1", *KITTING, sensors=("Camera-1",)) as r1:
-        driving = when(r1, lambda e: e.step == "drive" and e.fraction > 0.3)
-        started = await r1.start(StartRun(skill="navigate", params={"goal": sim["Station-1"]}))
-        took = await pause_when_moving(sim, r1, started.run_id, driving, base=True)
-        assert took <= BOUND
-        await assert_held(sim, r1, started.run_id)
-        result = await resume_and_wait(r1, started.run_id)
+async def paused_navigate(sim: Sim, r1: AgentCore) -> None:
+    """Navigate to Station-1, paused while driving: held, resumed, at the goal."""
+    driving = when(r1, lambda e: e.step == "drive" and e.fraction > 0.3)
+    started = await r1.start(StartRun(skill="navigate", params={"goal": sim["Station-1"]}))
+    took = await pause_when_moving(sim, r1, started.run_id, driving, base=True)
+    assert took <= BOUND
+    await assert_held(sim, r1, started.run_id)
+    result = await resume_and_wait(r1, started.run_id)
     assert result.success, result.message
     assert sim.wm.query_relation(sim["r1"], Rel.at, sim["Station-1"])
     state = await devices(sim)[2].state()
     goal = sim.wm.spatial.world_pose(sim["Station-1"]).position
     assert math.hypot(goal.x - state.pose.x, goal.y - state.pose.y) < 0.02, "at the goal"
+
+
+async def test_a_paused_navigate_stops_the_base_and_resumes_to_its_goal(kitting: Sim) -> None:
+    async with kitting.agent("r1", *KITTING, sensors=("Camera-1",)) as r1:
+        await paused_navigate(kitting, r1)
 
 
 async def test_a_paused_pick_holds_the_arm_and_resumes_to_the_grasp(kitting: Sim) -> None:
@@ -200,13 +204,5 @@ async def remote_agent(sim: Sim, endpoint: str, mesh_config: MeshConfigFactory) 
 async def test_a_navigate_paused_through_a_remote_device_server(
     kitting: Sim, router_endpoint: str, mesh_config: MeshConfigFactory
 ) -> None:
-    sim = kitting
-    async with remote_agent(sim, router_endpoint, mesh_config) as r1:
-        driving = when(r1, lambda e: isinstance(e, Progress) and e.fraction > 0.3)
-        started = await r1.start(StartRun(skill="navigate", params={"goal": sim["Station-1"]}))
-        took = await pause_when_moving(sim, r1, started.run_id, driving, base=True)
-        assert took <= BOUND
-        await assert_held(sim, r1, started.run_id)
-        result = await resume_and_wait(r1, started.run_id)
-    assert result.success, result.message
-    assert sim.wm.query_relation(sim["r1"], Rel.at, sim["Station-1"])
+    async with remote_agent(kitting, router_endpoint, mesh_config) as r1:
+        await paused_navigate(kitting, r1)

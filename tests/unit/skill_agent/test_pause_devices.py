@@ -6,6 +6,7 @@ fails to pause does not fail the pause."""
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import anyio
 import pytest
@@ -13,6 +14,7 @@ import pytest
 from device_drivers import DeviceUnavailableError
 from skill_agent import SkillContext
 from skill_agent.protocol import SkillDescription, StartRun
+from skill_agent.runtime import AgentCore
 from tests.assets.skills import Probe, Wait, entries
 from wm_store.protocol import Value
 
@@ -59,6 +61,17 @@ def grippers(kitting: Kitting, **options: bool) -> tuple[Held, Held, dict[str, o
     return left, right, {kitting["left"]: left, kitting["right"]: right}
 
 
+async def paused(
+    core: AgentCore, probe: Probe, kitting: Kitting, skill: str, **options: Any
+) -> str:
+    """Start ``skill`` on the left gripper, wait until it executes and pause it; its run id."""
+    params: dict[str, Value] = {"gripper": kitting["left"]}
+    started = await core.start(StartRun(skill=skill, params=params, **options))
+    await probe.wait_calls("execute", run_id=started.run_id)
+    await core.pause(started.run_id)
+    return started.run_id
+
+
 async def test_pause_and_resume_reach_the_runs_devices_only(
     make_agent: AgentFactory, kitting: Kitting, probe: Probe
 ) -> None:
@@ -82,16 +95,13 @@ async def test_the_deadline_stops_while_paused_and_counts_on_after(
 ) -> None:
     _, _, devices = grippers(kitting)
     async with make_agent(entries(probe, Wait), devices=devices) as core:
-        params: dict[str, Value] = {"gripper": kitting["left"]}
-        started = await core.start(StartRun(skill="wait", params=params, timeout=0.5))
         with anyio.fail_after(5):
-            await probe.wait_calls("execute")
-            await core.pause(started.run_id)
+            run_id = await paused(core, probe, kitting, "wait", timeout=0.5)
             await anyio.sleep(1.0)  # twice the run's timeout, paused
-            assert core.status(started.run_id).result is None
+            assert core.status(run_id).result is None
             resumed = time.monotonic()
-            await core.resume(started.run_id)
-            result = await core.wait(started.run_id)  # the gate stays shut: it times out
+            await core.resume(run_id)
+            result = await core.wait(run_id)  # the gate stays shut: it times out
     waited = time.monotonic() - resumed
     assert result.reason == "timeout"
     assert 0.1 < waited < 0.5 + 0.3  # the time left, not a fresh 0.5 s nor none
@@ -103,14 +113,11 @@ async def test_a_run_stopped_while_paused_frees_its_devices_for_on_preempt(
     left, _, devices = grippers(kitting)
     skills = entries(probe, CheckingPreempt)
     async with make_agent(skills, devices=devices, preempt_timeout=2.0) as core:
-        params: dict[str, Value] = {"gripper": kitting["left"]}
-        started = await core.start(StartRun(skill="checking_preempt", params=params))
         with anyio.fail_after(5):
-            await probe.wait_calls("execute")
-            await core.pause(started.run_id)
-            result = await core.stop(started.run_id)
+            run_id = await paused(core, probe, kitting, "checking_preempt")
+            result = await core.stop(run_id)
     assert result.reason == "preempted" and "on_preempt" not in result.message
-    assert probe.count("on_preempt", started.run_id) == 1
+    assert probe.count("on_preempt", run_id) == 1
     assert left.calls == ["pause", "resume"]  # released before on_preempt
 
 
