@@ -20,8 +20,9 @@ __all__ = ["HOLD_LIMIT", "DeviceHold"]
 
 _log = logging.getLogger(__name__)
 
-HOLD_LIMIT = 5.0
-"""Seconds a device gets to answer a pause (it answers once at rest) or a resume."""
+HOLD_LIMIT = 3.0
+"""Seconds a device gets to answer a pause (it answers once at rest) or a resume: the
+agent answers a pause within it, inside the 5 s a client waits by default."""
 
 
 class DeviceHold:
