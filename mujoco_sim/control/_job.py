@@ -19,9 +19,10 @@ velocity command's set-points) decelerates along its own path and its set-points
 where it stopped; the servos bring the device to rest there. A resume speeds the clock up
 over the same ramp and the motion goes on to its target. Time limits of a motion (the settle
 timeouts) are counted on the motion clock, so they do not run out while held. The ``Pause``
-job finishes once the clock stands and the device has settled (or :attr:`Controller.
-halt_timeout` after the ramp, whichever is first): its result is the simulated seconds it
-took. A motion command that arrives while paused is accepted (one at a time, as ever) but
+job finishes once the clock stands and the device has been at rest
+(:meth:`Controller.at_rest`) for 5 control ticks in a row, or :attr:`Controller.halt_timeout`
+after the ramp, whichever is first: its result is the simulated seconds it took. A motion
+command that arrives while paused is accepted (one at a time, as ever) but
 begins at the resume. ``Stop`` ends a pause: the held motion fails with
 :class:`MotionStoppedError` and the clock runs again. Controllers whose motion is not timed
 (the gripper's fingers) set ``pause_ramp = 0`` and hold in :meth:`Controller.on_pause`.
@@ -39,6 +40,9 @@ from device_drivers import DeviceBusyError, DeviceKey, MotionStoppedError, Progr
 from device_drivers.protocol import Command, Pause, Resume, Stop
 
 __all__ = ["NOT_INSTANT", "Controller", "Job"]
+
+_REST_TICKS = 5
+"""Control ticks in a row a paused device must be settled for its pause to be done."""
 
 NOT_INSTANT: Any = object()
 """What :meth:`Controller.instant` returns for a command that needs motion."""
@@ -116,6 +120,7 @@ class Controller:
         self._clock_seen: float | None = None
         self._deferred = False  # self.job came while paused: begun at the resume
         self._pausing: list[tuple[Job, float]] = []
+        self._resting = 0  # ticks in a row held and settled, while a pause job waits
 
     @property
     def active(self) -> bool:
@@ -131,6 +136,8 @@ class Controller:
             self._halting.append((job, t))
             return
         if isinstance(command, Pause):
+            if not self._pausing:
+                self._resting = 0
             if not self.paused:
                 self.paused = True
                 self.on_pause()
@@ -236,10 +243,12 @@ class Controller:
             if self.settled() or t - since >= self.halt_timeout:
                 self._halting.remove(item)
                 self.done(job, t - since)  # the result: simulated seconds to stand still
+        if self._pausing:
+            held = self.rate == 0.0 or self.job is None or self._deferred
+            self._resting = self._resting + 1 if held and self.at_rest() else 0
         for item in list(self._pausing):
             job, since = item
-            held = self.rate == 0.0 or self.job is None or self._deferred
-            if (held and self.settled()) or t - since >= self.pause_ramp + self.halt_timeout:
+            if self._resting >= _REST_TICKS or t - since >= self.pause_ramp + self.halt_timeout:
                 self._pausing.remove(item)
                 self.done(job, t - since)  # the result: simulated seconds to come to rest
 
@@ -269,6 +278,10 @@ class Controller:
 
     def settled(self) -> bool:
         return True
+
+    def at_rest(self) -> bool:
+        """Still enough for a pause to be done (default: :meth:`settled`)."""
+        return self.settled()
 
     def state(self) -> Struct | None:
         return None

@@ -48,7 +48,7 @@ def devices(sim: Sim) -> tuple[Arm, Gripper, MobileBase]:
 
 def still(state: BaseState) -> bool:
     v = state.velocity
-    return max(abs(v.vx), abs(v.vy), abs(v.wz)) <= 0.01
+    return max(abs(v.vx), abs(v.vy), abs(v.wz)) <= 0.005
 
 
 async def pause_when_moving(
