@@ -155,9 +155,11 @@ class RunControl:
 
     def pause(self) -> None:
         """Hold at the next checkpoint; the deadlines of the run and its sub-runs stop (see
-        the module doc). Raises RunStateError if ended or already paused."""
+        the module doc). Raises RunStateError if ended, being stopped or already paused."""
         if self.result is not None or self._resumed is not None:
             raise RunStateError(f"run {self.run_id} is {self.state}; it cannot be paused")
+        if self._stop is not None:  # on_preempt must reach its devices
+            raise RunStateError(f"run {self.run_id} is being stopped; it cannot be paused")
         self._resumed = anyio.Event()
         now = anyio.current_time()
         for run in self._family():

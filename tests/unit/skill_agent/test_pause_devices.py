@@ -12,7 +12,7 @@ import anyio
 import pytest
 
 from device_drivers import DeviceUnavailableError
-from skill_agent import SkillContext
+from skill_agent import RunStateError, SkillContext
 from skill_agent.protocol import SkillDescription, StartRun
 from skill_agent.runtime import AgentCore
 from tests.assets.skills import Probe, Wait, entries
@@ -54,6 +54,20 @@ class CheckingPreempt(Wait):
     async def on_preempt(self, ctx: SkillContext) -> None:
         await ctx.checkpoint()
         self.probe.record(ctx.run_id, "on_preempt")
+
+
+class SlowPreempt(Wait):
+    """``wait`` whose on_preempt waits for the probe's ``parked`` gate."""
+
+    description = SkillDescription(
+        name="slow_preempt",
+        doc="Waits; so does its on_preempt.",
+        parameters=Wait.description.parameters,
+    )
+
+    async def on_preempt(self, ctx: SkillContext) -> None:
+        self.probe.record(ctx.run_id, "on_preempt")
+        await self.probe.gate("parked").wait()
 
 
 def grippers(kitting: Kitting, **options: bool) -> tuple[Held, Held, dict[str, object]]:
@@ -119,6 +133,24 @@ async def test_a_run_stopped_while_paused_frees_its_devices_for_on_preempt(
     assert result.reason == "preempted" and "on_preempt" not in result.message
     assert probe.count("on_preempt", run_id) == 1
     assert left.calls == ["pause", "resume"]  # released before on_preempt
+
+
+async def test_a_run_being_stopped_cannot_be_paused(
+    make_agent: AgentFactory, kitting: Kitting, probe: Probe
+) -> None:
+    left, _, devices = grippers(kitting)
+    async with make_agent(entries(probe, SlowPreempt), devices=devices) as core:
+        params: dict[str, Value] = {"gripper": kitting["left"]}
+        started = await core.start(StartRun(skill="slow_preempt", params=params))
+        with anyio.fail_after(5):
+            await probe.wait_calls("execute")
+            async with anyio.create_task_group() as tg:
+                tg.start_soon(core.stop, started.run_id)
+                await probe.wait_calls("on_preempt", run_id=started.run_id)
+                with pytest.raises(RunStateError, match="being stopped"):
+                    await core.pause(started.run_id)
+                probe.open("parked")
+    assert left.calls == []
 
 
 async def test_a_queued_run_paused_leaves_the_devices_of_the_run_ahead_alone(
