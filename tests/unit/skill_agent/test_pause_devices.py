@@ -42,30 +42,18 @@ class Held:
         self.calls.append("resume")
 
 
-class CheckingPreempt(Wait):
-    """``wait`` whose on_preempt passes a checkpoint (as a motion helper would)."""
+class Parking(Wait):
+    """``wait`` whose on_preempt passes a checkpoint (as a motion helper would), then waits
+    for the probe's ``parked`` gate."""
 
     description = SkillDescription(
-        name="checking_preempt",
-        doc="Waits; its on_preempt checks.",
+        name="parking",
+        doc="Waits; its on_preempt checks, then waits too.",
         parameters=Wait.description.parameters,
     )
 
     async def on_preempt(self, ctx: SkillContext) -> None:
         await ctx.checkpoint()
-        self.probe.record(ctx.run_id, "on_preempt")
-
-
-class SlowPreempt(Wait):
-    """``wait`` whose on_preempt waits for the probe's ``parked`` gate."""
-
-    description = SkillDescription(
-        name="slow_preempt",
-        doc="Waits; so does its on_preempt.",
-        parameters=Wait.description.parameters,
-    )
-
-    async def on_preempt(self, ctx: SkillContext) -> None:
         self.probe.record(ctx.run_id, "on_preempt")
         await self.probe.gate("parked").wait()
 
@@ -75,15 +63,23 @@ def grippers(kitting: Kitting, **options: bool) -> tuple[Held, Held, dict[str, o
     return left, right, {kitting["left"]: left, kitting["right"]: right}
 
 
-async def paused(
+async def executing(
     core: AgentCore, probe: Probe, kitting: Kitting, skill: str, **options: Any
 ) -> str:
-    """Start ``skill`` on the left gripper, wait until it executes and pause it; its run id."""
+    """Start ``skill`` on the left gripper and wait until it executes; its run id."""
     params: dict[str, Value] = {"gripper": kitting["left"]}
     started = await core.start(StartRun(skill=skill, params=params, **options))
     await probe.wait_calls("execute", run_id=started.run_id)
-    await core.pause(started.run_id)
     return started.run_id
+
+
+async def paused(
+    core: AgentCore, probe: Probe, kitting: Kitting, skill: str, **options: Any
+) -> str:
+    """:func:`executing`, then paused."""
+    run_id = await executing(core, probe, kitting, skill, **options)
+    await core.pause(run_id)
+    return run_id
 
 
 async def test_pause_and_resume_reach_the_runs_devices_only(
@@ -91,15 +87,13 @@ async def test_pause_and_resume_reach_the_runs_devices_only(
 ) -> None:
     left, right, devices = grippers(kitting)
     async with make_agent(entries(probe, Wait), devices=devices) as core:
-        started = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
         with anyio.fail_after(5):
-            await probe.wait_calls("execute")
-            await core.pause(started.run_id)
+            run_id = await paused(core, probe, kitting, "wait")
             assert left.calls == ["pause"] and right.calls == []
-            await core.resume(started.run_id)
+            await core.resume(run_id)
             assert left.calls == ["pause", "resume"]
             probe.open("release")
-            result = await core.wait(started.run_id)
+            result = await core.wait(run_id)
     assert result.success
     assert left.calls == ["pause", "resume"] and right.calls == []
 
@@ -125,10 +119,10 @@ async def test_a_run_stopped_while_paused_frees_its_devices_for_on_preempt(
     make_agent: AgentFactory, kitting: Kitting, probe: Probe
 ) -> None:
     left, _, devices = grippers(kitting)
-    skills = entries(probe, CheckingPreempt)
-    async with make_agent(skills, devices=devices, preempt_timeout=2.0) as core:
+    probe.open("parked")
+    async with make_agent(entries(probe, Parking), devices=devices, preempt_timeout=2.0) as core:
         with anyio.fail_after(5):
-            run_id = await paused(core, probe, kitting, "checking_preempt")
+            run_id = await paused(core, probe, kitting, "parking")
             result = await core.stop(run_id)
     assert result.reason == "preempted" and "on_preempt" not in result.message
     assert probe.count("on_preempt", run_id) == 1
@@ -139,16 +133,14 @@ async def test_a_run_being_stopped_cannot_be_paused(
     make_agent: AgentFactory, kitting: Kitting, probe: Probe
 ) -> None:
     left, _, devices = grippers(kitting)
-    async with make_agent(entries(probe, SlowPreempt), devices=devices) as core:
-        params: dict[str, Value] = {"gripper": kitting["left"]}
-        started = await core.start(StartRun(skill="slow_preempt", params=params))
+    async with make_agent(entries(probe, Parking), devices=devices) as core:
         with anyio.fail_after(5):
-            await probe.wait_calls("execute")
+            run_id = await executing(core, probe, kitting, "parking")
             async with anyio.create_task_group() as tg:
-                tg.start_soon(core.stop, started.run_id)
-                await probe.wait_calls("on_preempt", run_id=started.run_id)
+                tg.start_soon(core.stop, run_id)
+                await probe.wait_calls("on_preempt", run_id=run_id)
                 with pytest.raises(RunStateError, match="being stopped"):
-                    await core.pause(started.run_id)
+                    await core.pause(run_id)
                 probe.open("parked")
     assert left.calls == []
 
@@ -175,12 +167,10 @@ async def test_a_device_that_cannot_pause_does_not_fail_the_pause(
 ) -> None:
     _, _, devices = grippers(kitting, broken=True)
     async with make_agent(entries(probe, Wait), devices=devices) as core:
-        started = await core.start(StartRun(skill="wait", params={"gripper": kitting["left"]}))
         with anyio.fail_after(5):
-            await probe.wait_calls("execute")
-            await core.pause(started.run_id)
-            assert core.status(started.run_id).state == "paused"
-            await core.resume(started.run_id)
+            run_id = await paused(core, probe, kitting, "wait")
+            assert core.status(run_id).state == "paused"
+            await core.resume(run_id)
             probe.open("release")
-            assert (await core.wait(started.run_id)).success
+            assert (await core.wait(run_id)).success
     assert "cannot pause left" in caplog.text
