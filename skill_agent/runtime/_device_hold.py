@@ -43,10 +43,11 @@ class DeviceHold:
                 found.append(device)
         return found
 
-    async def pause(self) -> None:
-        """Pause the run's devices; returns once each is at rest (or gave up)."""
+    async def pause(self) -> list[str]:
+        """Pause the run's devices; returns once each is at rest (or gave up), with the
+        names of those that answered."""
         self.held = devices = self.pausable()
-        await self._each(devices, lambda device: device.pause(), "pause")
+        return await self._each(devices, lambda device: device.pause(), "pause")
 
     async def resume(self) -> None:
         """Resume what :meth:`pause` held (nothing if nothing is held); shielded, so a run
@@ -58,11 +59,15 @@ class DeviceHold:
 
     async def _each(
         self, devices: list[Pausable], call: Callable[[Pausable], Awaitable[None]], what: str
-    ) -> None:
+    ) -> list[str]:
+        """``call`` every device side by side; the names of those that answered."""
+        answered: list[str] = []
+
         async def one(device: Pausable) -> None:
             with anyio.move_on_after(HOLD_LIMIT) as scope:
                 try:
                     await call(device)
+                    answered.append(_name(device))
                 except DeviceError as exc:
                     _log.warning("run %s: cannot %s %s: %s", self.run_id, what, _name(device), exc)
             if scope.cancelled_caught:
@@ -77,6 +82,7 @@ class DeviceHold:
         async with anyio.create_task_group() as tg:
             for device in devices:
                 tg.start_soon(one, device)
+        return sorted(answered)
 
 
 def _name(device: object) -> str:

@@ -13,12 +13,12 @@ import pytest
 
 from device_drivers import DeviceUnavailableError
 from skill_agent import RunStateError, SkillContext
-from skill_agent.protocol import SkillDescription, StartRun
+from skill_agent.protocol import Progress, SkillDescription, StartRun
 from skill_agent.runtime import AgentCore
 from tests.assets.skills import Probe, Wait, entries
 from wm_store.protocol import Value
 
-from .conftest import AgentFactory, Kitting
+from .conftest import AgentFactory, Kitting, Recorder
 
 pytestmark = pytest.mark.anyio
 
@@ -86,10 +86,15 @@ async def test_pause_and_resume_reach_the_runs_devices_only(
     make_agent: AgentFactory, kitting: Kitting, probe: Probe
 ) -> None:
     left, right, devices = grippers(kitting)
+    recorder = Recorder()
     async with make_agent(entries(probe, Wait), devices=devices) as core:
+        core.subscribe(recorder)
         with anyio.fail_after(5):
             run_id = await paused(core, probe, kitting, "wait")
             assert left.calls == ["pause"] and right.calls == []
+            last = recorder.of(run_id)[-1]
+            assert isinstance(last, Progress) and last.state == "paused"
+            assert last.message == "held at rest: left"
             await core.resume(run_id)
             assert left.calls == ["pause", "resume"]
             probe.open("release")
