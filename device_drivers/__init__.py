@@ -1,7 +1,8 @@
 """The device layer of skimesh: what any robot's drivers implement and how they travel.
 
 - The typed **device interfaces** (:class:`Arm`, :class:`MobileBase`, :class:`Gripper`,
-  :class:`Appliance`, :class:`ObjectSensor`) and their state values, which the skills call.
+  :class:`Appliance`, :class:`ObjectSensor`) and their state values, which the skills call;
+  :class:`Pausable` for a device whose motion can be held and continued.
 - The **errors** every driver raises, all under :class:`DeviceError`; they cross the wire by
   class name.
 - The **wire protocol** (:mod:`device_drivers.protocol`) and serving / proxying devices over
@@ -39,6 +40,7 @@ from ._interfaces import Gripper as Gripper
 from ._interfaces import GripperState as GripperState
 from ._interfaces import MobileBase as MobileBase
 from ._interfaces import ObjectSensor as ObjectSensor
+from ._interfaces import Pausable as Pausable
 from ._interfaces import Pose2D as Pose2D
 from ._interfaces import ProgressCallback as ProgressCallback
 from ._interfaces import Twist2D as Twist2D
@@ -68,6 +70,7 @@ __all__ = [
     "MotionStoppedError",
     "MotionTimeoutError",
     "ObjectSensor",
+    "Pausable",
     "Pose2D",
     "ProgressCallback",
     "SimulationDivergedError",

@@ -35,6 +35,7 @@ __all__ = [
     "GripperState",
     "MobileBase",
     "ObjectSensor",
+    "Pausable",
     "Pose2D",
     "ProgressCallback",
     "Twist2D",
@@ -130,6 +131,24 @@ class Device(Protocol):
     async def stop(self) -> None:
         """Halt now and hold the current position. Idempotent; never raises MotionError."""
         ...
+
+
+@runtime_checkable
+class Pausable(Protocol):
+    """A device whose motion can be held and continued (see the module doc).
+
+    ``pause()`` slows the running motion along its path to a stop and holds it there; the
+    motion's own clock stops with it, so its time limits do not run out while held, and a
+    command given while held waits (its motion starts at ``resume()``). It returns once the
+    device is at rest (at most the driver's stated bound; the MuJoCo controllers: 0.5 s of
+    slowing down, then the servos settle, within 2 s in all). ``resume()`` speeds the motion
+    up again and it goes on to its target; the call that started it returns as if it had
+    never been held. Both are idempotent and never raise ``MotionError``. ``stop()`` ends a
+    hold as well: the held motion fails with ``MotionStoppedError`` and the device is free."""
+
+    async def pause(self) -> None: ...
+
+    async def resume(self) -> None: ...
 
 
 @runtime_checkable

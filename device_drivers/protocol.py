@@ -68,10 +68,12 @@ __all__ = [
     "MoveJoints",
     "MoveTcp",
     "OpenGripper",
+    "Pause",
     "Press",
     "Progress",
     "Reply",
     "Request",
+    "Resume",
     "SetDoor",
     "SetVelocity",
     "StateMessage",
@@ -97,6 +99,15 @@ class GetState(_Cmd, tag="state", frozen=True):
 
 class Stop(_Cmd, tag="stop", frozen=True):
     """Any device: halt and hold (the reply comes once it is halted)."""
+
+
+class Pause(_Cmd, tag="pause", frozen=True):
+    """A pausable device: bring the running motion to rest on its path and hold it (the reply
+    comes once it is at rest; see :class:`device_drivers.Pausable`)."""
+
+
+class Resume(_Cmd, tag="resume", frozen=True):
+    """A pausable device: go on with the held motion (the reply comes at once)."""
 
 
 class Describe(_Cmd, tag="describe", frozen=True):
@@ -161,6 +172,8 @@ class Press(_Cmd, tag="press", frozen=True):
 Command: TypeAlias = (
     GetState
     | Stop
+    | Pause
+    | Resume
     | Describe
     | MoveJoints
     | MoveTcp

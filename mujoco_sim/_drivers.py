@@ -4,6 +4,7 @@
 Each method queues one command (the Structs of :mod:`device_drivers.protocol`) and waits for
 its outcome; state comes from the latest snapshot, so ``state()`` never waits for the
 simulation thread. Cancelling a call halts the device before the cancellation propagates.
+Every driver is :class:`~device_drivers.Pausable` (see :mod:`mujoco_sim.control`).
 Use :func:`sim_devices` to get every device of a world, keyed ``(owner, device)``.
 """
 
@@ -32,7 +33,9 @@ from device_drivers.protocol import (
     MoveJoints,
     MoveTcp,
     OpenGripper,
+    Pause,
     Press,
+    Resume,
     SetDoor,
     SetVelocity,
 )
@@ -60,6 +63,16 @@ class _SimDevice:
     async def stop(self) -> None:
         """Halt and hold; returns once the device is still (quietly if the world stopped)."""
         await self._world.halt(self._key)
+
+    async def pause(self) -> None:
+        """Hold the running motion on its path (:class:`~device_drivers.Pausable`); returns
+        once the device is at rest: 0.5 s of slowing down, then the servos settle (within
+        2 s of the call in all, simulated)."""
+        await self._world.execute(self._key, Pause())
+
+    async def resume(self) -> None:
+        """Go on with the held motion (:class:`~device_drivers.Pausable`)."""
+        await self._world.execute(self._key, Resume())
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self._label} ({self._key[0]}/{self._key[1]})>"

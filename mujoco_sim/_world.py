@@ -62,7 +62,7 @@ from device_drivers import (
     ProgressCallback,
     WorldPose,
 )
-from device_drivers.protocol import Command, Stop
+from device_drivers.protocol import Command, Pause, Resume, Stop
 from mujoco_sim._fast_run import FastRun
 from mujoco_sim._pacing import FastPacing, Pacing, RealTimePacing
 from mujoco_sim._plant import Batch, DeviceKind, Plant
@@ -284,7 +284,8 @@ class SimWorld:
         self, device: DeviceKey, command: Command, progress: ProgressCallback | None = None
     ) -> Any:
         """Queue ``command`` for ``device`` and wait for its outcome. Cancelling the caller
-        halts the device (it holds where it is) before the cancellation propagates."""
+        halts the device (it holds where it is) before the cancellation propagates (not for
+        ``Stop``, ``Pause`` and ``Resume``)."""
         if device not in self.plant.controllers:
             raise DeviceUnavailableError(f"no device {device[0]}/{device[1]} in this world")
         if self._on_loop.failure is not None:
@@ -299,8 +300,9 @@ class SimWorld:
             await job.done.wait()
         except anyio.get_cancelled_exc_class():
             job.cancelled = True
-            with anyio.CancelScope(shield=True), anyio.move_on_after(_HALT_WAIT):
-                await self.halt(device)
+            if not isinstance(command, Stop | Pause | Resume):
+                with anyio.CancelScope(shield=True), anyio.move_on_after(_HALT_WAIT):
+                    await self.halt(device)
             raise
         if job.error is not None:
             raise job.error

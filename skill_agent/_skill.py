@@ -16,7 +16,8 @@ Lifecycle methods (in the spirit of py_trees' ``setup / initialise / update / te
     less than ``description.sensing_max_age`` seconds ago.
 ``execute(ctx)``
     The work. May take long; must ``await`` regularly (every await is a point where a stop
-    request lands as cancellation, and :meth:`SkillContext.checkpoint` is where a pause holds).
+    request lands as cancellation, and :meth:`SkillContext.checkpoint` is where a pause holds;
+    a motion under way on a pausable device is held by the device itself).
     Raise :class:`~skill_agent.SkillFailure` to fail with a message. Report progress
     with :meth:`SkillContext.progress`. Hold-conditions are watched meanwhile; if one turns
     false the run is cancelled.
@@ -103,7 +104,9 @@ class SkillContext(Protocol):
         ...
 
     async def checkpoint(self) -> None:
-        """Wait here while the run is paused; a quick no-op otherwise."""
+        """Wait here while the run is paused; a quick no-op otherwise. Await it before each
+        motion: the devices of a paused run hold their motions, and a skill that checks here
+        starts no new one."""
         ...
 
     async def transact(self, ops: Sequence[Op]) -> int:

@@ -6,7 +6,8 @@ against them. A command returns when the device has finished it (motions use
 ``motion_timeout``, default 10 minutes; quick calls ``timeout``). Errors come back as the
 same exception classes (``MotionTimeoutError``, ``GraspLostError``, ...); no reply at all is
 :class:`DeviceUnavailableError`. Cancelling a call cancels the query and then sends ``Stop``
-(shielded, at most ``timeout`` s), so the device halts as it would in-process. With a
+(shielded, at most ``timeout`` s), so the device halts as it would in-process (not for
+``pause`` and ``resume``, which leave the motion to the device). With a
 ``progress`` callback the proxy subscribes to a per-call progress key for the call's length.
 :func:`connect_devices` finds the devices of an owner (or of all owners) and builds proxies.
 """
@@ -76,6 +77,15 @@ class RemoteDevice:
     async def stop(self) -> None:
         await self._call(p.Stop(), motion=False)
 
+    async def pause(self) -> None:
+        """Hold the running motion (:class:`~device_drivers.Pausable`); returns once the
+        device is at rest."""
+        await self._call(p.Pause(), motion=False)
+
+    async def resume(self) -> None:
+        """Go on with the held motion (:class:`~device_drivers.Pausable`)."""
+        await self._call(p.Resume(), motion=False)
+
     async def _call(
         self, command: p.Command, *, motion: bool = True, progress: ProgressCallback | None = None
     ) -> p.Reply:
@@ -117,7 +127,7 @@ class RemoteDevice:
         except NoReplyError as exc:
             raise DeviceUnavailableError(f"{self._label}: {exc}") from None
         except anyio.get_cancelled_exc_class():
-            if not isinstance(request.command, p.Stop):
+            if not isinstance(request.command, p.Stop | p.Pause | p.Resume):
                 # the caller is being cancelled anyway; a device that is gone cannot move
                 with (
                     anyio.CancelScope(shield=True),

@@ -7,11 +7,12 @@ proxies elsewhere can use them with the same interface:
 - ``cmd`` (queryable): a :class:`~device_drivers.protocol.Request`, answered once the
   command is done (a motion replies when it has finished) with a ``Reply``, or with an
   :class:`~device_drivers.protocol.ErrorReply` as a Zenoh error reply. Each query runs in
-  its own task (meshlink), so a ``Stop`` overtakes a running motion. The queryable is a
-  :class:`meshlink.rpc.RequestHandler`: a request that cannot be read (malformed, or longer
-  than ``max_request_bytes``) answers ``bad_request`` / ``too_large`` (a ``CommandError`` to
-  the proxies) and nothing moves; an unexpected exception answers ``internal`` (a
-  ``DeviceError``) and is logged.
+  its own task (meshlink), so a ``Stop`` (or a ``Pause``) overtakes a running motion;
+  ``Pause`` / ``Resume`` need a :class:`~device_drivers.Pausable` device (``CommandError``
+  otherwise). The queryable is a :class:`meshlink.rpc.RequestHandler`: a request that
+  cannot be read (malformed, or longer than ``max_request_bytes``) answers ``bad_request`` /
+  ``too_large`` (a ``CommandError`` to the proxies) and nothing moves; an unexpected
+  exception answers ``internal`` (a ``DeviceError``) and is logged.
 - ``state`` (publication): the device's state, when it changed and at least once a second,
   checked at ``state_rate`` Hz. Congestion control DROP: a late state is worthless, the next
   one replaces it (commands and their replies are the reliable path).
@@ -42,6 +43,7 @@ from device_drivers._interfaces import (
     Gripper,
     MobileBase,
     ObjectSensor,
+    Pausable,
     ProgressCallback,
 )
 from meshlink import Mesh
@@ -131,6 +133,11 @@ class _Served:
             return await self.state()
         if isinstance(cmd, p.Stop):
             await device.stop()
+            return p.Done()
+        if isinstance(cmd, p.Pause | p.Resume):
+            if not isinstance(device, Pausable):
+                raise CommandError(f"{device.name} cannot be paused")
+            await (device.pause() if isinstance(cmd, p.Pause) else device.resume())
             return p.Done()
         key = request.progress_key
         if key and not key.startswith(self.progress_prefix):

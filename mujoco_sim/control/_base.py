@@ -277,6 +277,11 @@ class BaseController(Controller):
         slow = float(np.abs(self.d.qvel[self.dadr]).max()) < 0.01
         return slow and float(error[:2].max()) < 0.002 and float(error[2]) < 0.002
 
+    def at_rest(self) -> bool:
+        """Settled, and slower than 3 mm/s (3 mrad/s): a paused base creeps onto its hold
+        point at the end."""
+        return self.settled() and float(np.abs(self.d.qvel[self.dadr]).max()) < 0.003
+
     def state(self) -> BaseState:
         return self.capture()()
 

@@ -8,6 +8,7 @@ Openings and forces go through the robot's :class:`~mujoco_sim.control.GripperDr
 opening has been still for 5 ticks (or is below 2 mm) the grasp is evaluated and the job
 returns the :class:`GripperState`. ``open(width)`` detaches first, then opens; it ends when
 the opening is reached or the fingers are blocked. Both time out after 3 s (simulated).
+A pause holds the fingers where they are at once; the resume sends them on to the opening.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ _TIMEOUT = 3.0
 
 
 class GripperController(Controller):
+    pause_ramp = 0.0  # the fingers halt at once on a pause (see on_pause)
+
     def __init__(
         self, key: DeviceKey, label: str, data: Any, drive: GripperDrive, grasp: Grasping
     ) -> None:
@@ -90,6 +93,17 @@ class GripperController(Controller):
 
     def hold(self) -> None:
         self.d.ctrl[self.act] = self.drive.control(self.opening)
+
+    def on_pause(self) -> None:
+        """The fingers stop where they are (their motion is not timed: no slowing down)."""
+        if self.job is not None and not self._deferred:
+            self.hold()
+
+    def on_resume(self) -> None:
+        """The fingers go on to the job's opening; stillness is counted afresh."""
+        if self.job is not None and not self._deferred:
+            self.d.ctrl[self.act] = self.drive.control(self._target)
+            self._still = 0
 
     def settled(self) -> bool:
         return self.drive.speed(self.d) < _STILL

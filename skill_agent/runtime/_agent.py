@@ -218,12 +218,22 @@ class AgentCore:
         return await run.wait()
 
     async def pause(self, run_id: str) -> None:
-        """Hold the run at its next checkpoint. Raises UnknownRunError, RunStateError."""
-        self._run(run_id).pause()
+        """Hold the run at its next checkpoint and pause its devices; returns once they are
+        at rest (see ``Run``), reported by a progress event naming them. Raises
+        UnknownRunError, RunStateError."""
+        run = self._run(run_id)
+        run.pause()
+        if run.acquired and not run.simulated:  # a queued run's devices are another's
+            held = await run.devices.pause()
+            if held and run.state == "paused":
+                run.progress(f"held at rest: {', '.join(held)}")
 
     async def resume(self, run_id: str) -> None:
-        """Release a paused run. Raises UnknownRunError, RunStateError."""
-        self._run(run_id).resume()
+        """Release a paused run and resume its devices. Raises UnknownRunError,
+        RunStateError."""
+        run = self._run(run_id)
+        run.resume()
+        await run.devices.resume()
 
     def status(self, run_id: str) -> RunInfo:
         """A snapshot of the run (``paused`` while paused). Never blocks; raises

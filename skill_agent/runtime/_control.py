@@ -6,10 +6,15 @@
 blocking), the waits (``wait``, ``wait_accepted``, ``checkpoint``) and the events reporting it,
 each :class:`~skill_agent.protocol.Progress` with the next ``seq``, then exactly one
 :class:`~skill_agent.protocol.RunResult`. Driving the lifecycle is :class:`Run`'s.
+
+A pause holds the run at its checkpoints and stops its deadline (and its sub-runs'): the
+time left is kept and counts again from the resume. Its devices are paused by the agent
+through :attr:`RunControl.devices` (a :class:`~skill_agent.runtime._device_hold.DeviceHold`).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -31,6 +36,7 @@ from skill_agent.protocol._runs import (
     RunState,
 )
 from skill_agent.protocol._skills import SkillDescription
+from skill_agent.runtime._device_hold import DeviceHold
 from wm_store import WmClient
 from wm_store.protocol import Value
 
@@ -78,6 +84,11 @@ class RunControl:
         self.params = dict(params)
         self.resources = list(resources)
         self.parent = parent
+        self.children: list[RunControl] = []
+        if parent is not None:
+            parent.children.append(self)
+        self.devices = DeviceHold(run_id, env.devices, self.resources)
+        """The run's pausable devices (paused and resumed by the agent with the run)."""
         self.started_at = time.time()
         self._state: RunState = "pending"
         self._step = ""
@@ -85,6 +96,7 @@ class RunControl:
         self._scope = anyio.CancelScope()
         self._stop: tuple[ResultReason, str] | None = None
         self._resumed: anyio.Event | None = None
+        self._time_left: float | None = None  # of the deadline, while paused
         self._trusted: list[str] = []
         self._effects_revision = 0
         self._accepted = anyio.Event()
@@ -127,10 +139,14 @@ class RunControl:
     # ------------------------------------------------------------------ commands (sync)
 
     def stop(self, reason: ResultReason = "preempted", message: str = "stopped") -> None:
-        """Cancel the run (it ends at the skill's next await); idempotent, never blocks."""
+        """Cancel the run (it ends at the skill's next await; a paused run is released);
+        idempotent, never blocks."""
         if self.result is None:
             self._stop = self._stop or (reason, message)
             self._scope.cancel()
+            if self._resumed is not None:  # no checkpoint holds on_preempt
+                resumed, self._resumed = self._resumed, None
+                resumed.set()
 
     def abandon(self, message: str) -> None:
         """End a run whose task is gone without driving it (result ``preempted``)."""
@@ -138,19 +154,64 @@ class RunControl:
             self._finish("preempted", message)
 
     def pause(self) -> None:
-        """Hold at the next checkpoint. Raises RunStateError if ended or already paused."""
+        """Hold at the next checkpoint; the deadlines of the run and its sub-runs stop (see
+        the module doc). Raises RunStateError if ended, being stopped or already paused."""
         if self.result is not None or self._resumed is not None:
             raise RunStateError(f"run {self.run_id} is {self.state}; it cannot be paused")
+        if self._stop is not None:  # on_preempt must reach its devices
+            raise RunStateError(f"run {self.run_id} is being stopped; it cannot be paused")
         self._resumed = anyio.Event()
+        now = anyio.current_time()
+        for run in self._family():
+            run._freeze_deadline(now)
         self._emit_progress("paused", "paused; holds at its next checkpoint")
 
     def resume(self) -> None:
-        """Release a paused run. Raises RunStateError if it is not paused."""
+        """Release a paused run; its deadlines count again. Raises RunStateError if it is
+        not paused."""
         if self.result is not None or self._resumed is None:
             raise RunStateError(f"run {self.run_id} is {self.state}, not paused")
         resumed, self._resumed = self._resumed, None
+        now = anyio.current_time()
+        for run in self._family():
+            if run._time_left is not None and not run.held:
+                run._scope.deadline, run._time_left = now + run._time_left, None
         resumed.set()
         self._emit_progress(self._state, "resumed")
+
+    @property
+    def held(self) -> bool:
+        """Paused, itself or through a parent."""
+        run: RunControl | None = self
+        while run is not None:
+            if run._resumed is not None and run.result is None:
+                return True
+            run = run.parent
+        return False
+
+    def set_deadline(self, seconds: float) -> None:
+        """The run's deadline, ``seconds`` from now (kept, not counting, while held)."""
+        if self.held:
+            self._time_left = seconds
+        else:
+            self._scope.deadline = anyio.current_time() + seconds
+
+    def _freeze_deadline(self, now: float) -> None:
+        deadline = self._scope.deadline
+        if self._time_left is None and not math.isinf(deadline):
+            self._time_left = max(0.0, deadline - now)
+            self._scope.deadline = math.inf
+
+    def _family(self) -> list[RunControl]:
+        """This run and its sub-runs that have not ended, at any depth."""
+        found: list[RunControl] = []
+        stack: list[RunControl] = [self]
+        while stack:
+            run = stack.pop()
+            if run.result is None:
+                found.append(run)
+                stack.extend(run.children)
+        return found
 
     async def checkpoint(self) -> None:
         await anyio.lowlevel.checkpoint()

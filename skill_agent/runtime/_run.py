@@ -27,7 +27,12 @@ run ends with exactly one :class:`~skill_agent.protocol.RunResult`)::
 - *Timeout*: ``StartRun.timeout``, else ``description.timeout``, counted from when the run
   holds its devices (a queued run's wait does not count).
 - *Pause* holds the run at its next checkpoint (between steps, and wherever the skill awaits
-  :meth:`RunContext.checkpoint`); the deadline keeps running while paused.
+  :meth:`RunContext.checkpoint`, as the standard skills do before each motion), and the agent
+  pauses the run's pausable devices (:class:`~skill_agent.runtime._device_hold.DeviceHold`):
+  a motion under way comes to rest on its path and goes on at the resume. The deadline stops
+  while paused (the time left counts again from the resume). A run stopped while paused
+  resumes its devices first: the motion cut by the stop has halted (``MotionStoppedError``),
+  the others are free for ``on_preempt``.
 - *Simulated outcome*: no sensing, no execute (composite skills do run their children,
   simulated); success is drawn, effects committed on success; failure is ``execution``.
 - *World-model writes*: the skill's ``ctx.wm`` is a :class:`~skill_agent.runtime.RunWm`; every
@@ -95,6 +100,8 @@ class Run(RunControl):
         self.skill = skill
         self.timeout = timeout if timeout is not None else description.timeout
         self.outcomes, self._acquire = outcomes, acquire
+        self.acquired = acquire is None
+        """The run holds its devices (a queued run: once its turn came)."""
         self.simulated = outcomes is not None
         self.context = RunContext(self)
         self._touched = False  # a skill method was entered: on_preempt is due after a cut
@@ -112,8 +119,10 @@ class Run(RunControl):
             reason, message = await self._guarded()
         except anyio.get_cancelled_exc_class():
             with anyio.CancelScope(shield=True):
+                await self.devices.resume()
                 self._finish("preempted", "the agent stopped" + await self._preempt())
             raise
+        await self.devices.resume()  # a run stopped while paused frees its devices first
         if reason in _PREEMPTING:
             message += await self._preempt()
         return self._finish(reason, message)
@@ -124,9 +133,10 @@ class Run(RunControl):
             with self._scope:
                 if self._acquire is not None:
                     await self._acquire()
+                    self.acquired = True
                     self._emit_progress("pending", "devices acquired")
                 if self.timeout is not None:
-                    self._scope.deadline = anyio.current_time() + self.timeout
+                    self.set_deadline(self.timeout)
                 outcome = await self._lifecycle()
         except Exception as exc:
             outcome = self._failure(exc)

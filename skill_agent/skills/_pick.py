@@ -152,6 +152,7 @@ class Pick(Skill):
                 step="approach",
                 end=0.6,
             )
+            await ctx.checkpoint()
             await ctx.progress(f"closing on {obj.name}", step="grasp", fraction=0.6)
             await close_gripper(gripper, float_param(ctx, "force"), expect=obj.label)
             for k, (direction, distance) in enumerate(lift):

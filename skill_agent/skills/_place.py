@@ -195,6 +195,7 @@ class Place(Skill):
             raise SkillFailure(f"place: no spot in {target.name} within reach: {why}")
         _, _, back, distance = self.travel(ctx, goal)
         try:
+            await ctx.checkpoint()
             await ctx.progress(f"releasing {obj.name}", step="release", fraction=0.7)
             await release(gripper)
             await tracked(

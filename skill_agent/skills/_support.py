@@ -148,7 +148,8 @@ async def tracked(
     end: float = 1.0,
 ) -> T:
     """Await ``call(progress)`` (a primitive taking a progress callback) while its reports
-    become run progress events (``start..end`` of the run, message ``message``). The
+    become run progress events (``start..end`` of the run, message ``message``). A paused
+    run holds before the call (its checkpoint); a call under way is held by its device. The
     callback stays cheap and synchronous; a task publishes the latest fraction, coalescing
     reports that come faster. Errors of ``call`` propagate as themselves (not as a group)."""
     latest = [start]
@@ -173,6 +174,7 @@ async def tracked(
         result.append(await call(callback))
         tg.cancel_scope.cancel()
 
+    await ctx.checkpoint()  # a paused run issues no further motion
     await ctx.progress(message, fraction=start, step=step)
     try:
         async with anyio.create_task_group() as tg:

@@ -18,6 +18,8 @@ from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, ErrorReply, WireError
     [
         p.GetState(),
         p.Stop(),
+        p.Pause(),
+        p.Resume(),
         p.Describe(),
         p.MoveJoints({"elbow": 1.0}, duration=2.0),
         p.MoveTcp(WorldPose(1, 2, 3), straight=False, speed=0.1, whole_body=True),

@@ -165,3 +165,10 @@ def test_the_proxy_raises_what_callers_catch(served: Served) -> None:
         served.portal.call(proxy.open, 5.0)
     bad = served.portal.call(lambda: served.mesh.get(served.key, b"\xc1", timeout=10.0))
     assert isinstance(p.error_from_reply(bad[0].payload), CommandError)
+
+
+def test_a_device_that_is_not_pausable_refuses_pause_and_resume(served: Served) -> None:
+    proxy = RemoteGripper(served.mesh, "r1", "gripper")
+    for call in (proxy.pause, proxy.resume):
+        with pytest.raises(CommandError, match="fake-gripper cannot be paused"):
+            served.portal.call(call)
