@@ -87,6 +87,7 @@ class Supervisor:
             with self._up:
                 code = await self._bring_up(tg, stack)
                 if code == 0:
+                    await self._write()  # the status file says ready before the line does
                     local = len(self.plan.local())
                     self._say(f"site up: {local} processes of host {self.plan.host} ready")
                     await anyio.sleep_forever()

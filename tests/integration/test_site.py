@@ -1,0 +1,134 @@
+"""``skimesh up`` of a one-host site on loopback (router, store, both kitting agents with
+simulated outcomes in one process, task agent): it comes up in order with health checks, a
+task submitted from the CLI succeeds, an agent process killed with SIGKILL is restarted by the
+policy and is ready again, ``skimesh status`` shows it, and ``skimesh down`` from another
+process stops every child (each PID gone)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from meshlink.testing import free_port
+
+from .procs import ROOT, Child
+
+pytestmark = [pytest.mark.slow, pytest.mark.zenoh, pytest.mark.timeout(300)]
+
+SITE = """
+mesh = "{mesh}"
+scenario = "kitting"
+stop_grace = 5.0
+
+[[routers]]
+listen = ["tcp/127.0.0.1:{port}"]
+
+[store]
+
+[[agents]]
+robots = ["all"]
+simulate = true
+
+[task_agent]
+
+[restart]
+policy = "on-failure"
+backoff = 0.5
+max_restarts = 2
+window = 60.0
+"""
+
+
+def _skimesh(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "skimesh", *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def _wait_restarted(state: Path, name: str, old: int, timeout: float) -> int:
+    """The new PID of ``name`` once the status file shows it ready after one restart."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        row = _status(state)[name]
+        if row["state"] == "ready" and row["pid"] != old:
+            assert row["restarts"] == 1
+            return int(str(row["pid"]))
+        time.sleep(0.1)
+    raise AssertionError(f"{name} not ready again in {timeout} s: {_status(state)[name]}")
+
+
+def _status(state: Path) -> dict[str, dict[str, object]]:
+    data = json.loads((state / "status.json").read_text(encoding="utf-8"))
+    return {row["name"]: row for row in data["rows"]}
+
+
+def test_up_runs_a_task_restarts_a_killed_agent_and_down_stops_all(
+    tmp_path: Path, mesh_name: str
+) -> None:
+    port = free_port()
+    site = tmp_path / "site.toml"
+    site.write_text(SITE.format(mesh=mesh_name, port=port), encoding="utf-8")
+    state = tmp_path / "state"
+    where = (str(site), "--state-dir", str(state))
+    up = Child(["-m", "skimesh", "up", *where], name="skimesh up")
+    pids: set[int] = set()
+    try:
+        up.wait_stderr("site up: 4 processes of host local ready", timeout=180)
+        lines = "".join(up.stderr_lines)
+        order = list(re.findall(r"skimesh up: (\S+) on local ready", lines))
+        assert order == ["router", "store", "agents-r1-r2", "task-agent"]
+        rows = _status(state)
+        assert all(row["state"] == "ready" for row in rows.values())
+        pids = {int(str(row["pid"])) for row in rows.values()}
+        assert all((state / "logs" / f"{name}.log").is_file() for name in rows)
+
+        done = _skimesh(
+            "task", "submit", "--connect", f"tcp/127.0.0.1:{port}", "--mesh", mesh_name,
+            "--goal", "contain(KitBox-1, Gear-1)",
+        )  # fmt: skip
+        assert done.returncode == 0, done.stdout + done.stderr
+
+        old = int(str(rows["agents-r1-r2"]["pid"]))
+        os.kill(old, 9)
+        line = up.wait_stderr("restart 1 in 0.5 s", timeout=30)
+        assert "killed by SIGKILL" in line
+        new = _wait_restarted(state, "agents-r1-r2", old, timeout=60)
+        assert _gone(old)
+        pids.add(new)
+
+        status = _skimesh("status", *where)
+        assert status.returncode == 0, status.stderr
+        assert re.search(rf"agents-r1-r2\s+local\s+ready\s+{new}\s+1", status.stdout)
+
+        down = _skimesh("down", *where)
+        assert down.returncode == 0, down.stdout + down.stderr
+        assert up.proc.wait(timeout=30) == 0, up.log()
+        assert all(_gone(pid) for pid in pids), [p for p in pids if not _gone(p)]
+        rows = _status(state)
+        assert {row["state"] for row in rows.values()} == {"stopped"}
+        assert _skimesh("status", *where).returncode == 1
+    finally:
+        up.stop()
+        for pid in pids:  # only the site's children, by PID, should any be left
+            if not _gone(pid):
+                os.kill(pid, 9)
