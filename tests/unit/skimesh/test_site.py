@@ -57,7 +57,8 @@ host = "server"
 @pytest.mark.parametrize("path", SITES, ids=[p.name for p in SITES])
 def test_every_shipped_site_plans_for_each_of_its_hosts(path: Path) -> None:
     site = load_site(path)
-    for host in sorted(site.hosts) or [None]:
+    hosts: list[str | None] = [*sorted(site.hosts)] or [None]
+    for host in hosts:
         plan = make_plan(site, path, host)
         kinds = [c.kind for c in plan.components]
         assert kinds[0] == "router"
