@@ -11,7 +11,7 @@ import sys
 import time
 from collections.abc import Callable
 from contextlib import AsyncExitStack
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO
 
@@ -57,6 +57,7 @@ class Supervisor:
         self._tg: anyio.abc.TaskGroup | None = None
         self.message = ""
         self._dirty: anyio.Event | None = None
+        self._writing: anyio.Lock | None = None
         self._up: anyio.CancelScope | None = None
         self._mesh: Mesh | None = None
         self._env = dict(os.environ, PYTHONUNBUFFERED="1")
@@ -79,6 +80,7 @@ class Supervisor:
     async def run(self) -> int:
         code = 0
         self._dirty = anyio.Event()
+        self._writing = anyio.Lock()
         self._up = anyio.CancelScope()
         async with AsyncExitStack() as stack, anyio.create_task_group() as tg:
             self._tg = tg
@@ -267,5 +269,9 @@ class Supervisor:
             await anyio.sleep(ATTEMPT / 10)
 
     async def _write(self) -> None:
-        status = Status(os.getpid(), self.plan.host, str(self.plan.path), self.rows())
-        await anyio.to_thread.run_sync(self.state.write_status, status)
+        """Write the status file (one writer at a time: each replaces it whole)."""
+        assert self._writing is not None
+        async with self._writing:
+            rows = [replace(r) for r in self.rows()]  # copies: the thread reads them
+            status = Status(os.getpid(), self.plan.host, str(self.plan.path), rows)
+            await anyio.to_thread.run_sync(self.state.write_status, status)
