@@ -114,7 +114,7 @@ def _down(args: argparse.Namespace) -> int:
     plan, state = _plan(args)
     holder = state.holder()
     if holder is None:
-        left = _stop_orphans(state)
+        left = _stop_orphans(state, plan.site.stop_grace)
         print(f"skimesh down: the site is not up on host {plan.host}{left}", file=sys.stderr)
         return 0
     os.kill(holder, signal.SIGTERM)
@@ -132,20 +132,8 @@ def _down(args: argparse.Namespace) -> int:
     return 0
 
 
-def _stop_orphans(state: StateDir) -> str:
-    """Processes a `skimesh up` killed by SIGKILL left running: SIGTERM each by its PID
-    (only PIDs that still run `skimesh`)."""
-    status = state.read_status()
-    stopped = []
-    for row in status.rows if status else []:
-        if row.pid and row.log and row.state not in ("stopped", "exited", "failed"):
-            try:
-                cmdline = Path(f"/proc/{row.pid}/cmdline").read_bytes()
-            except OSError:
-                continue
-            if b"skimesh" in cmdline:
-                os.kill(row.pid, signal.SIGTERM)
-                stopped.append(f"{row.name} (pid {row.pid})")
+def _stop_orphans(state: StateDir, grace: float) -> str:
+    stopped = state.stop_leftovers(grace)
     return f"; stopped what it left running: {', '.join(stopped)}" if stopped else ""
 
 

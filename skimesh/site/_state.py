@@ -13,6 +13,8 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import signal
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
@@ -107,5 +109,36 @@ class StateDir:
         rows = [Row(**r) for r in data.pop("rows", [])]
         return Status(**data, rows=rows)
 
+    def stop_leftovers(self, grace: float) -> list[str]:
+        """Stop the processes a `skimesh up` that was killed (SIGKILL) left running, by the
+        PIDs of its status file, in reverse order: SIGTERM, SIGKILL after ``grace`` seconds.
+        Only PIDs that still run ``python -m skimesh`` are touched. Returns what was stopped."""
+        status = self.read_status()
+        stopped = []
+        for row in reversed(status.rows if status else []):
+            if not row.pid or not row.log or row.state in ("stopped", "exited", "failed"):
+                continue
+            if not _runs_skimesh(row.pid):
+                continue
+            os.kill(row.pid, signal.SIGTERM)
+            deadline = time.monotonic() + grace
+            while _runs_skimesh(row.pid) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            if _runs_skimesh(row.pid):
+                os.kill(row.pid, signal.SIGKILL)
+            stopped.append(f"{row.name} (pid {row.pid})")
+        return stopped
+
     def log_path(self, name: str) -> Path:
         return self.logs / f"{name}.log"
+
+
+def _runs_skimesh(pid: int) -> bool:
+    """Whether ``pid`` is a live ``python -m skimesh`` process (not a reused PID, nor a
+    zombie)."""
+    try:
+        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        state = Path(f"/proc/{pid}/stat").read_text(encoding="ascii").rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return False
+    return state[0] != "Z" and b"skimesh" in cmdline and b"-m" in cmdline

@@ -132,3 +132,36 @@ def test_up_runs_a_task_restarts_a_killed_agent_and_down_stops_all(
         for pid in pids:  # only the site's children, by PID, should any be left
             if not _gone(pid):
                 os.kill(pid, 9)
+
+
+def _dead(pid: int) -> bool:
+    """Gone, or a zombie nobody reaped yet (its parent was killed)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text(encoding="ascii")
+    except OSError:
+        return True
+    return stat.rsplit(")", 1)[1].split()[0] == "Z"
+
+
+def test_down_stops_what_a_killed_supervisor_left_running(tmp_path: Path, mesh_name: str) -> None:
+    port = free_port()
+    site = tmp_path / "site.toml"
+    site.write_text(SITE.format(mesh=mesh_name, port=port), encoding="utf-8")
+    state = tmp_path / "state"
+    where = (str(site), "--state-dir", str(state))
+    up = Child(["-m", "skimesh", "up", *where], name="skimesh up")
+    pids: set[int] = set()
+    try:
+        up.wait_stderr("site up", timeout=180)
+        pids = {int(str(row["pid"])) for row in _status(state).values()}
+        up.kill()  # SIGKILL: its children run on, in their own sessions
+        assert not any(_dead(pid) for pid in pids)
+        down = _skimesh("down", *where)
+        assert down.returncode == 0, down.stdout + down.stderr
+        assert "stopped what it left running" in down.stderr
+        assert all(_dead(pid) for pid in pids), [p for p in pids if not _dead(p)]
+    finally:
+        up.stop()
+        for pid in pids:
+            if not _dead(pid):
+                os.kill(pid, 9)
