@@ -2,7 +2,9 @@
 simulated outcomes in one process, task agent): it comes up in order with health checks, a
 task submitted from the CLI succeeds, an agent process killed with SIGKILL is restarted by the
 policy and is ready again, ``skimesh status`` shows it, and ``skimesh down`` from another
-process stops every child (each PID gone)."""
+process stops every child (each PID gone); ``skimesh down`` also stops what a killed
+``skimesh up`` left; each shipped one-host site (kitting, meal, workshop) comes up with its
+simulator and goes down."""
 
 from __future__ import annotations
 
@@ -164,4 +166,29 @@ def test_down_stops_what_a_killed_supervisor_left_running(tmp_path: Path, mesh_n
         up.stop()
         for pid in pids:
             if not _dead(pid):
+                os.kill(pid, 9)
+
+
+@pytest.mark.sim
+@pytest.mark.parametrize("name", ["kitting", "meal", "workshop"])
+def test_each_shipped_one_host_site_comes_up_with_its_simulator(tmp_path: Path, name: str) -> None:
+    """The shipped site files as written (the router moved to a free port)."""
+    site = ROOT / "configs" / "sites" / f"{name}.toml"
+    state = tmp_path / "state"
+    where = (str(site), "--listen", f"tcp/127.0.0.1:{free_port()}", "--state-dir", str(state))
+    up = Child(["-m", "skimesh", "up", *where], name=f"skimesh up {name}")
+    pids: set[int] = set()
+    try:
+        up.wait_stderr("site up", timeout=240)
+        rows = _status(state)
+        assert "sim" in rows and {str(row["state"]) for row in rows.values()} == {"ready"}
+        pids = {int(str(row["pid"])) for row in rows.values()}
+        down = _skimesh("down", *where)
+        assert down.returncode == 0, down.stdout + down.stderr
+        assert up.proc.wait(timeout=30) == 0, up.log()
+        assert all(_gone(pid) for pid in pids)
+    finally:
+        up.stop()
+        for pid in pids:
+            if not _gone(pid):
                 os.kill(pid, 9)
