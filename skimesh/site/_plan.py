@@ -18,7 +18,6 @@ from ._schema import Agents, Router, Site
 __all__ = ["Component", "Plan", "SiteError", "load_site", "make_plan", "pick_host"]
 
 Kind = Literal["router", "store", "sim", "agents", "task-agent", "monitor"]
-ORDER: tuple[Kind, ...] = ("router", "store", "sim", "agents", "task-agent", "monitor")
 _ENDPOINT = re.compile(r"^(?P<proto>[a-z0-9-]+)/(?P<addr>\[[^\]]+\]|[^:/]+):(?P<port>\d+)(#.*)?$")
 _ANY = {"0.0.0.0", "[::]"}
 _LOCAL = "local"
