@@ -62,7 +62,7 @@ def _site_arguments(p: argparse.ArgumentParser) -> None:
         "--state-dir",
         type=Path,
         metavar="DIR",
-        help="logs, status, lock and the store's data (default: "
+        help="logs, status, lock and the store's data (default: the site's state_dir, else "
         "$XDG_STATE_HOME/skimesh/sites/SITE-HOST, ~/.local/state/...)",
     )
     p.add_argument(
@@ -78,7 +78,8 @@ def _plan(args: argparse.Namespace) -> tuple[Plan, StateDir]:
     from ..site import StateDir, default_state_dir, load_site, make_plan
 
     plan = make_plan(load_site(args.site), args.site, args.host, listen=args.listen)
-    return plan, StateDir(args.state_dir or default_state_dir(args.site, plan.host))
+    where = args.state_dir or default_state_dir(args.site, plan.host, plan.site.state_dir)
+    return plan, StateDir(where)
 
 
 def _up(args: argparse.Namespace) -> int:

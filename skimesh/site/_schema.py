@@ -198,6 +198,9 @@ class Site(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
         ready_timeout (s): How long a process of this host may take to become ready.
         remote_timeout (s): How long to wait for a component of another host over the mesh.
         stop_grace (s): After SIGTERM, how long a process may take to stop before SIGKILL.
+        state_dir: Each host's state directory (logs, status file, lock, the store's data;
+            `~` expands, `{host}` becomes the host's name; `--state-dir` wins). Default:
+            `$XDG_STATE_HOME/skimesh/sites/<site file name>-<host>` (`~/.local/state/...`).
     """
 
     mesh: str = "default"
@@ -214,3 +217,4 @@ class Site(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     ready_timeout: Seconds = 120.0
     remote_timeout: Seconds = 300.0
     stop_grace: Seconds = 10.0
+    state_dir: str = ""

@@ -24,8 +24,11 @@ from ._plan import SiteError
 __all__ = ["Row", "StateDir", "Status", "default_state_dir"]
 
 
-def default_state_dir(site: Path, host: str) -> Path:
-    """``$XDG_STATE_HOME/skimesh/sites/<site file stem>-<host>`` (``~/.local/state/...``)."""
+def default_state_dir(site: Path, host: str, configured: str = "") -> Path:
+    """The site file's ``state_dir`` (``~`` expanded, ``{host}`` replaced), else
+    ``$XDG_STATE_HOME/skimesh/sites/<site file stem>-<host>`` (``~/.local/state/...``)."""
+    if configured:
+        return Path(configured.replace("{host}", host)).expanduser()
     base = Path(os.environ.get("XDG_STATE_HOME") or Path.home() / ".local" / "state")
     return base / "skimesh" / "sites" / f"{site.stem}-{host}"
 

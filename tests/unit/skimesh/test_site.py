@@ -11,6 +11,7 @@ from skimesh.site import (
     Restart,
     SiteError,
     StateDir,
+    default_state_dir,
     describe_exit,
     load_site,
     make_plan,
@@ -156,6 +157,16 @@ def test_restart_policy_backs_off_and_gives_up_after_max_restarts_in_the_window(
     assert restart_delay(Restart(policy="no"), 1, [], 1.0) is None
     assert describe_exit(-9) == "killed by SIGKILL"
     assert describe_exit(3) == "exit code 3"
+
+
+def test_the_state_directory_comes_from_the_site_else_xdg(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path))
+    site = Path("configs/sites/kitting.toml")
+    assert default_state_dir(site, "server") == tmp_path / "skimesh/sites/kitting-server"
+    chosen = default_state_dir(site, "r1", f"{tmp_path}/site/{{host}}")
+    assert chosen == tmp_path / "site/r1"
 
 
 def test_the_state_directory_lock_admits_one_supervisor(tmp_path: Path) -> None:
