@@ -18,7 +18,7 @@ from typing import IO
 import anyio
 
 import skimesh
-from meshlink import Mesh, MeshConfig, open_mesh
+from meshlink import Mesh, MeshConfig, MeshlinkError, open_mesh
 
 from ._plan import Component, Plan
 from ._probe import ATTEMPT, probe
@@ -86,21 +86,23 @@ class Supervisor:
             self._tg = tg
             tg.start_soon(self._watch_signals)
             tg.start_soon(self._publish)
-            with self._up:
-                code = await self._bring_up(tg, stack)
-                if code == 0:
-                    await self._write()  # the status file says ready before the line does
-                    local = len(self.plan.local())
-                    self._say(f"site up: {local} processes of host {self.plan.host} ready")
-                    await anyio.sleep_forever()
-            self.stopping = True
-            with anyio.CancelScope(shield=True):
-                self._say("stopping")
-                await stack.aclose()
-                await self._stop_all()
-                self._say("stopped")
-                await self._write()
-            tg.cancel_scope.cancel()
+            try:
+                with self._up:
+                    code = await self._bring_up(tg, stack)
+                    if code == 0:
+                        await self._write()  # the status file says ready before the line does
+                        local = len(self.plan.local())
+                        self._say(f"site up: {local} processes of host {self.plan.host} ready")
+                        await anyio.sleep_forever()
+            finally:  # also when something failed here: no process is left behind
+                self.stopping = True
+                with anyio.CancelScope(shield=True):
+                    self._say("stopping")
+                    await stack.aclose()
+                    await self._stop_all()
+                    self._say("stopped")
+                    await self._write()
+                tg.cancel_scope.cancel()
         for proc in self.procs:
             if proc.log is not None:
                 proc.log.close()
@@ -124,7 +126,11 @@ class Supervisor:
                 self._set(row, "skipped", "`skimesh monitor` is not part of skimesh yet")
                 continue
             if c.kind != "router" and self._mesh is None:
-                self._mesh = await stack.enter_async_context(open_mesh(self._mesh_config()))
+                try:
+                    self._mesh = await stack.enter_async_context(open_mesh(self._mesh_config()))
+                except MeshlinkError as e:
+                    self.message = f"cannot join the mesh to probe {c.name}: {e}"
+                    return 1
             if c.host != self.plan.host:
                 self._set(row, "waiting", f"on host {c.host}: waiting for it over the mesh")
                 why = await self._until_ready(proc, site.remote_timeout)

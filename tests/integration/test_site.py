@@ -3,7 +3,8 @@ simulated outcomes in one process, task agent): it comes up in order with health
 task submitted from the CLI succeeds, an agent process killed with SIGKILL is restarted by the
 policy and is ready again, ``skimesh status`` shows it, and ``skimesh down`` from another
 process stops every child (each PID gone); ``skimesh down`` also stops what a killed
-``skimesh up`` left; each shipped one-host site (kitting, meal, workshop) comes up with its
+``skimesh up`` left; a process that ends before it is ready fails the bring-up (exit 1,
+what was started is stopped); each shipped one-host site (kitting, meal, workshop) comes up with its
 simulator and goes down."""
 
 from __future__ import annotations
@@ -192,3 +193,24 @@ def test_each_shipped_one_host_site_comes_up_with_its_simulator(tmp_path: Path, 
         for pid in pids:
             if not _gone(pid):
                 os.kill(pid, 9)
+
+
+def test_a_process_that_ends_before_it_is_ready_fails_the_bring_up(tmp_path: Path) -> None:
+    """A store that cannot start (its ontology file is no Turtle): `skimesh up` exits 1 naming
+    it and its log, and stops the router it started."""
+    (tmp_path / "bad.ttl").write_text("this is not turtle .\n", encoding="utf-8")
+    site = tmp_path / "site.toml"
+    site.write_text(
+        f'[[routers]]\nlisten = ["tcp/127.0.0.1:{free_port()}"]\n'
+        '[store]\nontology = ["bad.ttl"]\n[task_agent]\n',
+        encoding="utf-8",
+    )
+    state = tmp_path / "state"
+    done = _skimesh("up", str(site), "--state-dir", str(state))
+    assert done.returncode == 1, done.stderr
+    log = state / "logs" / "store.log"
+    assert f"store did not come up: exit code 2 before it was ready (log: {log})" in done.stderr
+    rows = _status(state)
+    assert (rows["store"]["state"], rows["router"]["state"]) == ("failed", "stopped")
+    assert rows["task-agent"]["state"] == "pending"
+    assert _gone(int(str(rows["router"]["pid"])))
