@@ -119,6 +119,27 @@ FORMATS: tuple[Format, ...] = (
             "then child indices: `root.1.0`); a block without an `id` gets its path as id."
         ),
     ),
+    Format(
+        slug="site",
+        title="Site file",
+        root="skimesh.site:Site",
+        docs=("skimesh.site._schema",),
+        examples=("configs/sites/*.toml",),
+        complete=("skimesh.site._schema",),
+        intro=(
+            "A site: its mesh, its hosts, and which host runs which process (routers, the "
+            "world-model store, the simulator, the skill agents, the task agent). `skimesh up "
+            "SITE.toml --host NAME` starts one host's processes in dependency order, each ready "
+            "(a health probe) before the next, restarts them by the `[restart]` policy and "
+            "stops them on Ctrl-C or `skimesh down SITE.toml`; `skimesh status SITE.toml` shows "
+            "them (see the [site guide](../guides/site.md)). `skimesh.site.load_site` decodes "
+            "the file strictly (an unknown key is an error naming its path, e.g. "
+            "`$.store.dta`); `skimesh.site.make_plan` then checks hosts, the scenario, robots "
+            "and ports. Relative paths (`zenoh_config`, agent `configs`, store `ontology`, a "
+            "scenario file) are relative to the site file; `data` and `rerun` to the host's "
+            "state directory."
+        ),
+    ),
 )
 
 ZENOH_NOTE = (

@@ -16,7 +16,7 @@ from skill_agent import SkillError
 from task_agent import TaskError
 from wm_store import WmError
 
-from .commands import agent, demo, events, router, sim, task, wm
+from .commands import agent, demo, events, router, sim, site, task, wm
 from .errors import SkimeshError
 from .runtime import configure_logging
 
@@ -44,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_parser(sub)
     task.add_parser(sub)
     events.add_parser(sub)
+    site.add_parser(sub)
     return parser
 
 

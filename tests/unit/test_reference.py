@@ -19,6 +19,7 @@ import pytest
 
 from scenario import load_scenario
 from skill_agent.runtime import load_config
+from skimesh.site import load_site
 from task_agent.taskfile import read_task_file
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -42,6 +43,7 @@ LOADERS: dict[str, Callable[[Path], object]] = {
     "scenario": load_scenario,
     "agent": load_config,
     "task": read_task_file,
+    "site": load_site,
 }
 
 
