@@ -22,6 +22,7 @@ from __future__ import annotations
 import uuid
 from collections.abc import AsyncIterator, Callable, Iterable, Mapping, Sequence
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
+from typing import TYPE_CHECKING
 
 import anyio
 
@@ -29,7 +30,6 @@ from wm_store._errors import ConflictError, ElementNotFoundError, TransportError
 from wm_store._registration import RobotRegistration, registration_ops, unregistration_ops
 from wm_store._replica import Replica
 from wm_store._transport import WmTransport, raise_for_error
-from wm_store.ontology import Ontology, property_turtle, relation_turtle
 from wm_store.protocol import (
     AddElement,
     CardinalityReply,
@@ -66,6 +66,9 @@ from wm_store.protocol import (
 )
 from wm_store.reasoners import SpatialReasoner, classify, identify
 from wm_store.scene import match_relations, resolve
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["WmClient"]
 
@@ -369,6 +372,8 @@ class WmClient:
         comment: str = "",
     ) -> int:
         """Teach a new relation between classes (SkiROS learns concepts during operation)."""
+        from wm_store.ontology import relation_turtle  # rdflib, only when teaching
+
         text = relation_turtle(
             name, domain=domain, range=range, parent=parent, label=label, comment=comment
         )
@@ -386,6 +391,8 @@ class WmClient:
         comment: str = "",
     ) -> int:
         """Teach a new data property of value ``kind`` (float, int, bool, string, Pose...)."""
+        from wm_store.ontology import property_turtle  # rdflib, only when teaching
+
         text = property_turtle(
             name,
             kind=kind,

@@ -21,7 +21,6 @@ import msgspec
 from meshlink import add_mesh_arguments
 from wm_store import WmClient, transact_in_batches
 from wm_store.protocol import Element, PropertyFilter, Query
-from wm_store.rdf import export_turtle, import_turtle
 from wm_store.scene import SceneState, id_sort_key
 
 from ..runtime import run_service
@@ -333,6 +332,8 @@ def _check(args: argparse.Namespace) -> int:
 def _export(args: argparse.Namespace) -> int:
     async def body(wm: WmClient) -> int:
         state = wm.replica.state.copy()  # the replica keeps changing; rdflib runs in a thread
+        from wm_store.rdf import export_turtle  # rdflib, only to export
+
         text = await anyio.to_thread.run_sync(export_turtle, state, wm.ontology)
         if args.file:
             await anyio.Path(args.file).write_text(text)
@@ -358,6 +359,8 @@ def _import(args: argparse.Namespace) -> int:
     text = Path(args.file).read_text()
 
     async def body(wm: WmClient) -> int:
+        from wm_store.rdf import import_turtle  # rdflib, only to import
+
         state = wm.replica.state.copy()  # for the id counters; rdflib parses in a thread
         ops = await anyio.to_thread.run_sync(
             functools.partial(import_turtle, text, wm.ontology, state=state)

@@ -17,6 +17,7 @@ import logging
 import sys
 from collections.abc import Awaitable, Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import anyio
 import msgspec
@@ -25,8 +26,6 @@ from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
-from skill_agent.runtime import AgentConfig, load_config
-from skill_agent.server import run_agent
 from wm_store import WmClient, WmError, ZenohTransport
 from wm_store.ontology import TYPED_KINDS
 from wm_store.protocol import Value
@@ -34,6 +33,9 @@ from wm_store.protocol import Value
 from ..errors import SkimeshError
 from ..runtime import run_service
 from ._connect import mesh_session
+
+if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
+    from skill_agent.runtime import AgentConfig
 
 __all__ = ["add_parser", "parse_params", "scenario_config_path"]
 
@@ -154,6 +156,7 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
     label, or the name inside one of its agent configs: ``Scenario.agents``), or
     FileNotFoundError listing what the scenario has."""
     from scenario import ScenarioError, load_scenario
+    from skill_agent.runtime import load_config
 
     from .sim import scenario_file
 
@@ -174,6 +177,8 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
 
 
 def _load(args: argparse.Namespace) -> list[AgentConfig]:
+    from skill_agent.runtime import load_config
+
     if args.agent_config:
         configs = [load_config(path) for path in args.agent_config]
     else:
@@ -202,6 +207,8 @@ def _scenario_agents(scenario: str) -> dict[str, str]:
 
 
 def _serve(args: argparse.Namespace) -> int:
+    from skill_agent.server import run_agent
+
     try:
         configs = _load(args)
     except (SkillError, FileNotFoundError) as e:

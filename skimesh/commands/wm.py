@@ -16,10 +16,7 @@ from typing import TYPE_CHECKING
 import anyio
 
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
-from wm_store.ontology import Ontology
 from wm_store.protocol import Transact
-from wm_store.rdf import import_turtle
-from wm_store.server import StoreConfig, WmStore, serve_store
 
 from ..runtime import run_service
 from ._connect import read_terms
@@ -27,6 +24,7 @@ from ._wm_client import add_client_commands
 
 if TYPE_CHECKING:
     from scenario import Scenario
+    from wm_store.server import WmStore
 
 __all__ = ["add_parser"]
 
@@ -86,6 +84,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def _serve(args: argparse.Namespace) -> int:
     if args.wm_command:  # a sub-command without its own func cannot happen; keep argparse honest
         raise SystemExit(f"unknown wm command {args.wm_command}")
+    from wm_store.ontology import Ontology  # the store's modules load only to serve
+    from wm_store.rdf import import_turtle
+    from wm_store.server import StoreConfig, WmStore, serve_store
+
     config = StoreConfig(
         data_dir=args.data, durability=args.durability, sparql_timeout=args.sparql_timeout
     )

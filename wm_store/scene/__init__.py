@@ -10,7 +10,14 @@ state) and the client (its replica), so both index and answer the same way.
   avoid labels; its ``display_name`` is public as :func:`wm_store.display_name`).
 - :func:`merge_observation` / :func:`resolve_observations`: multi-source property resolution.
 - :func:`min_cardinality_violations`: the minimum-cardinality report (``CheckCardinality``).
+
+Transactions (``_transactions``, which read Turtle with rdflib) load on first use (PEP 562).
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from ._cardinality import min_cardinality_violations as min_cardinality_violations
 from ._query import id_sort_key as id_sort_key
@@ -22,9 +29,26 @@ from ._resolution import resolve_observations as resolve_observations
 from ._state import SceneState as SceneState
 from ._state import Undo as Undo
 from ._state import parse_id as parse_id
-from ._transactions import SELF as SELF
-from ._transactions import TxnResult as TxnResult
-from ._transactions import apply_transaction as apply_transaction
+
+if TYPE_CHECKING:
+    from ._transactions import SELF as SELF
+    from ._transactions import TxnResult as TxnResult
+    from ._transactions import apply_transaction as apply_transaction
+
+#: The names imported on first use (PEP 562), and their modules.
+_LAZY: dict[str, str] = {
+    "SELF": "._transactions",
+    "TxnResult": "._transactions",
+    "apply_transaction": "._transactions",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    return value
+
 
 __all__ = [
     "SELF",
