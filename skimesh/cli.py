@@ -7,20 +7,32 @@ from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from collections.abc import Sequence
-from importlib import metadata
-
-from device_drivers import DeviceError
-from meshlink import MeshlinkError
-from skill_agent import SkillError
-from task_agent import TaskError
-from wm_store import WmError
 
 from .commands import agent, demo, router, sim, task, wm
-from .errors import SkimeshError
+from .errors import USER_ERRORS, Exit, exit_code
 from .runtime import configure_logging
 
 __all__ = ["build_parser", "describe_error", "main"]
+
+
+class _Version(argparse.Action):
+    """``--version``: reads the installed version only when asked (importlib.metadata is slow
+    to import, and every start would pay for it)."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, help: str) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        from importlib import metadata
+
+        try:
+            version = metadata.version("skimesh")
+        except metadata.PackageNotFoundError:  # a source tree that was never installed
+            version = "unknown (not installed)"
+        print(f"skimesh {version}")
+        parser.exit()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -28,14 +40,19 @@ def build_parser() -> argparse.ArgumentParser:
         prog="skimesh",
         description="skimesh: a Zenoh-distributed multi-robot skill mesh. Start with "
         "`skimesh demo`; run services on several hosts with `router`, `wm`, ... and "
-        "`--connect tcp/HOST:7447`.",
+        "`--connect tcp/HOST:7447`. Exit codes: 0 ok, 1 failed, 2 refused (usage, bad input, "
+        "unknown name), 3 unreachable (no reply in time), 4 aborted, 5 the physics "
+        "contradicts the world model, 130 interrupted.",
     )
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)"
     )
     parser.add_argument(
-        "--version", action="version", version=f"skimesh {_version()}", help="print the version"
+        "--debug",
+        action="store_true",
+        help="show the traceback of an error (by default: one line saying what went wrong)",
     )
+    parser.add_argument("--version", action=_Version, help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     router.add_parser(sub)
     wm.add_parser(sub)
@@ -44,25 +61,6 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_parser(sub)
     task.add_parser(sub)
     return parser
-
-
-def _version() -> str:
-    try:
-        return metadata.version("skimesh")
-    except metadata.PackageNotFoundError:  # a source tree that was never installed
-        return "unknown (not installed)"
-
-
-#: Errors a user can act on: printed as one line (exit code 2), not as a traceback.
-USER_ERRORS: tuple[type[Exception], ...] = (
-    MeshlinkError,
-    WmError,
-    SkillError,
-    TaskError,
-    DeviceError,
-    SkimeshError,
-    OSError,
-)
 
 
 def describe_error(error: BaseException) -> str:
@@ -81,20 +79,32 @@ def _leaves(error: BaseException) -> list[BaseException]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; its exit code (:class:`skimesh.errors.Exit`). An error a user can act
+    on is one line on stderr (with its traceback under ``--debug``); any other error is a bug
+    and shows its traceback."""
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args.verbose)
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
-        return 130
+        return Exit.INTERRUPTED
+    except SystemExit as stop:  # a command's usage error as text: SystemExit("--set takes ...")
+        if not isinstance(stop.code, str):
+            raise
+        if args.debug:
+            traceback.print_exc()
+        print(f"skimesh {args.command}: {stop.code}", file=sys.stderr)
+        return Exit.REFUSED
     except (*USER_ERRORS, BaseExceptionGroup) as error:  # type: ignore[misc]  # a tuple: mypy misreads the unpacking
         leaves = _leaves(error)
         if not all(isinstance(leaf, USER_ERRORS) for leaf in leaves):
             raise
+        if args.debug:
+            traceback.print_exc()
         for leaf in leaves:
             print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
-        return 2
+        return max(exit_code(leaf) for leaf in leaves)
 
 
 if __name__ == "__main__":

@@ -1,12 +1,50 @@
-"""The errors of the skimesh application: :class:`SkimeshError` is the root of every one.
+"""The errors of the skimesh application and the one exit-code table of every command.
 
-The command line prints an error a user can act on as one line with exit code 2
-(:data:`skimesh.cli.USER_ERRORS`, which holds this root beside the other packages' roots).
+:class:`SkimeshError` is the root of the application's errors. :class:`Exit` is what every
+``skimesh`` command exits with (the README's "Exit codes" table), and :func:`exit_code` tells
+which code an error a user can act on gets; :data:`USER_ERRORS` are those errors (the packages'
+roots): the command line prints them as one line, with a traceback only under ``--debug``.
 """
 
 from __future__ import annotations
 
-__all__ = ["DemoError", "SkimeshError"]
+from enum import IntEnum
+
+from device_drivers import DeviceError, DeviceUnavailableError
+from meshlink import MeshlinkError, NoReplyError, SessionError
+from skill_agent import AgentTransportError, SkillError, SkillFailure
+from task_agent import (
+    PlanningError,
+    RemoteTaskError,
+    TaskError,
+    TaskTransportError,
+    UnsolvableError,
+)
+from wm_store import OntologyError, TransportError, ValidationError, WmError
+
+__all__ = ["USER_ERRORS", "DemoError", "Exit", "SkimeshError", "UsageError", "exit_code"]
+
+
+class Exit(IntEnum):
+    """The exit code of every ``skimesh`` command."""
+
+    OK = 0
+    """Done: the task or run succeeded, the element was found, the service stopped cleanly."""
+    FAILED = 1
+    """The mesh did what was asked and it did not succeed: a task or skill run failed, a check
+    found unmet conditions, a query matched nothing, the planner failed, a service failed."""
+    REFUSED = 2
+    """Nothing ran: a usage error, bad input, an unknown name (element, agent, skill, class),
+    or a request refused before it started (a false pre-condition, a busy device, a goal no
+    plan reaches)."""
+    UNREACHABLE = 3
+    """The mesh, the world model, an agent, a device or the task agent did not answer in time."""
+    ABORTED = 4
+    """The task was aborted (``task abort``, the operator) before it ended."""
+    CONTRADICTED = 5
+    """The task succeeded in the world model but the physics contradicts it."""
+    INTERRUPTED = 130
+    """Ctrl-C or SIGTERM stopped the command (a run in flight is stopped)."""
 
 
 class SkimeshError(Exception):
@@ -15,3 +53,51 @@ class SkimeshError(Exception):
 
 class DemoError(SkimeshError):
     """The demo cannot start (a busy data directory, a scenario without agents, ...)."""
+
+
+class UsageError(SkimeshError):
+    """A command line or input file the command cannot use (exit :attr:`Exit.REFUSED`)."""
+
+
+#: Errors a user can act on: one line on stderr and the code :func:`exit_code` gives.
+USER_ERRORS: tuple[type[Exception], ...] = (
+    MeshlinkError,
+    WmError,
+    SkillError,
+    TaskError,
+    DeviceError,
+    SkimeshError,
+    OSError,
+)
+
+#: Most specific first: the first class an error is an instance of gives its code.
+_CODES: tuple[tuple[type[BaseException], Exit], ...] = (
+    (NoReplyError, Exit.UNREACHABLE),
+    (SessionError, Exit.UNREACHABLE),
+    (TransportError, Exit.UNREACHABLE),
+    (AgentTransportError, Exit.UNREACHABLE),
+    (TaskTransportError, Exit.UNREACHABLE),
+    (DeviceUnavailableError, Exit.UNREACHABLE),
+    (TimeoutError, Exit.UNREACHABLE),
+    (ConnectionError, Exit.UNREACHABLE),
+    (SkillFailure, Exit.FAILED),
+    (UnsolvableError, Exit.REFUSED),
+    (PlanningError, Exit.FAILED),
+    (RemoteTaskError, Exit.FAILED),
+    (ValidationError, Exit.REFUSED),
+    (OntologyError, Exit.REFUSED),
+    (SkillError, Exit.REFUSED),
+    (TaskError, Exit.REFUSED),
+    (SkimeshError, Exit.REFUSED),
+    (FileNotFoundError, Exit.REFUSED),
+    (MeshlinkError, Exit.REFUSED),
+)
+
+
+def exit_code(error: BaseException) -> Exit:
+    """The code of an error: unreachable for no reply in time, refused for bad input and
+    unknown names, failed for what ran and did not succeed (:class:`Exit`)."""
+    for kind, code in _CODES:
+        if isinstance(error, kind):
+            return code
+    return Exit.FAILED  # a storage fault, a service's internal error, a device's fault

@@ -19,10 +19,12 @@ import anyio
 import msgspec
 
 from meshlink import add_mesh_arguments
-from wm_store import WmClient, transact_in_batches
+from wm_store import ElementNotFoundError, WmClient, transact_in_batches
+from wm_store.ontology import did_you_mean
 from wm_store.protocol import Element, PropertyFilter, Query
 from wm_store.scene import SceneState, id_sort_key
 
+from ..errors import UsageError
 from ..runtime import run_service
 from ._connect import wm_session
 from ._edit import add_edit_commands
@@ -94,7 +96,7 @@ def _add_read_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]
     )
     get.add_argument("ids", nargs="+", metavar="ID", help="element id, e.g. Gear-1")
     get.set_defaults(
-        func=lambda a: _client(a, lambda wm: _print_json([wm.get_element(i) for i in a.ids]))
+        func=lambda a: _client(a, lambda wm: _print_json([_element(wm, i) for i in a.ids]))
     )
 
     tree = _command(
@@ -213,6 +215,15 @@ def _add_write_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     scen.set_defaults(func=_import_scenario)
 
 
+def _element(wm: WmClient, element_id: str) -> Element:
+    """The element ``element_id``, or ElementNotFoundError naming the closest ids."""
+    found = wm.find_element(element_id)
+    if found is None:
+        hint = did_you_mean(element_id, wm.replica.state.elements)
+        raise ElementNotFoundError(f"no element {element_id!r} in the world model{hint}")
+    return found
+
+
 def _client(args: argparse.Namespace, body: Body) -> int:
     async def main() -> int:
         async with wm_session(args) as wm:
@@ -238,7 +249,7 @@ async def _print_json(obj: object) -> int:
 async def _print_tree(args: argparse.Namespace, wm: WmClient) -> int:
     state = wm.replica.state
     if args.root:
-        wm.get_element(args.root)
+        _element(wm, args.root)
     if args.json:
         return await _write_json(_tree_json(state, [args.root] if args.root else None))
     print(render_tree(state, [args.root] if args.root else None))
@@ -274,7 +285,7 @@ def _query(args: argparse.Namespace) -> int:
     for cond in args.where:
         name, sep, raw = cond.partition("=")
         if not sep:
-            raise SystemExit(f"--where takes PROP=VALUE, not {cond!r}")
+            raise UsageError(f"--where takes PROP=VALUE, not {cond!r}")
         filters.append(PropertyFilter(property=name, op="eq", value=_parse_scalar(raw)))
     q = Query(type=args.type, label=args.label, filters=filters)
     return _client(args, lambda wm: _print_found(args, list(wm.resolve_element(q))))

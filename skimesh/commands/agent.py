@@ -30,7 +30,7 @@ from wm_store import WmClient, WmError, ZenohTransport
 from wm_store.ontology import TYPED_KINDS
 from wm_store.protocol import Value
 
-from ..errors import SkimeshError
+from ..errors import Exit, SkimeshError
 from ..runtime import run_service
 from ._connect import mesh_session
 
@@ -41,7 +41,8 @@ __all__ = ["add_parser", "parse_params", "scenario_config_path"]
 
 _log = logging.getLogger("skimesh.agent")
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
-EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE, EXIT_INTERRUPTED = 1, 2, 3, 130
+EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE = Exit.FAILED, Exit.REFUSED, Exit.UNREACHABLE
+EXIT_INTERRUPTED = Exit.INTERRUPTED
 
 
 def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:

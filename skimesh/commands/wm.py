@@ -18,6 +18,7 @@ import anyio
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
 from wm_store.protocol import Transact
 
+from ..errors import UsageError
 from ..runtime import run_service
 from ._connect import read_terms
 from ._wm_client import add_client_commands
@@ -83,7 +84,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def _serve(args: argparse.Namespace) -> int:
     if args.wm_command:  # a sub-command without its own func cannot happen; keep argparse honest
-        raise SystemExit(f"unknown wm command {args.wm_command}")
+        raise UsageError(f"unknown wm command {args.wm_command}")
     from wm_store.ontology import Ontology  # the store's modules load only to serve
     from wm_store.rdf import import_turtle
     from wm_store.server import StoreConfig, WmStore, serve_store
