@@ -6,6 +6,7 @@ Run ``skimesh --help`` for the list; every sub-command has its own ``--help``.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import traceback
 from collections.abc import Sequence
@@ -63,10 +64,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The long-running commands: their own progress lines (``skimesh.*`` loggers, level INFO) show
+#: by default; a client command shows warnings and errors only.
+_SERVICES = frozenset({"router", "wm", "sim", "agent", "task-agent"})
+
+
+def _is_service(args: argparse.Namespace) -> bool:
+    return args.command in _SERVICES and not getattr(args, "wm_command", None)
+
+
 def describe_error(error: BaseException) -> str:
     """One line for a user: the message, or the kind of error where it has none (a bare
     ``TimeoutError`` says nothing by itself)."""
-    text = str(error)
+    text = str(error.code) if isinstance(error, SystemExit) else str(error)
     if isinstance(error, TimeoutError) and not text:
         return "timed out (no answer in time; is the router reachable and the service running?)"
     return text or type(error).__name__
@@ -85,26 +95,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args.verbose)
+    if _is_service(args) and not args.verbose:  # a service says it is ready, as ROS 2 nodes do
+        logging.getLogger("skimesh").setLevel(logging.INFO)
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
         return Exit.INTERRUPTED
-    except SystemExit as stop:  # a command's usage error as text: SystemExit("--set takes ...")
-        if not isinstance(stop.code, str):
-            raise
-        if args.debug:
-            traceback.print_exc()
-        print(f"skimesh {args.command}: {stop.code}", file=sys.stderr)
-        return Exit.REFUSED
-    except (*USER_ERRORS, BaseExceptionGroup) as error:  # type: ignore[misc]  # a tuple: mypy misreads the unpacking
+    except (*USER_ERRORS, SystemExit, BaseExceptionGroup) as error:  # type: ignore[misc]  # a tuple: mypy misreads the unpacking
         leaves = _leaves(error)
-        if not all(isinstance(leaf, USER_ERRORS) for leaf in leaves):
+        if not all(_for_the_user(leaf) for leaf in leaves):
             raise
         if args.debug:
             traceback.print_exc()
         for leaf in leaves:
             print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
-        return max(exit_code(leaf) for leaf in leaves)
+        return max(_code(leaf) for leaf in leaves)
+
+
+def _for_the_user(error: BaseException) -> bool:
+    """An error a user can act on: one of :data:`USER_ERRORS`, or a command's usage error as
+    text (``SystemExit("--set takes PROP=VALUE, ...")``)."""
+    return isinstance(error, USER_ERRORS) or (
+        isinstance(error, SystemExit) and isinstance(error.code, str)
+    )
+
+
+def _code(error: BaseException) -> int:
+    return Exit.REFUSED if isinstance(error, SystemExit) else exit_code(error)
 
 
 if __name__ == "__main__":

@@ -12,15 +12,18 @@ from enum import IntEnum
 
 from device_drivers import DeviceError, DeviceUnavailableError
 from meshlink import MeshlinkError, NoReplyError, SessionError
-from skill_agent import AgentTransportError, SkillError, SkillFailure
+from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, UNAVAILABLE
+from skill_agent import AgentTransportError, RemoteSkillError, SkillError, SkillFailure
 from task_agent import (
     PlanningError,
     RemoteTaskError,
+    RequestError,
     TaskError,
     TaskTransportError,
     UnsolvableError,
 )
 from wm_store import OntologyError, TransportError, ValidationError, WmError
+from wm_store import RemoteError as WmRemoteError
 
 __all__ = ["USER_ERRORS", "DemoError", "Exit", "SkimeshError", "UsageError", "exit_code"]
 
@@ -83,7 +86,6 @@ _CODES: tuple[tuple[type[BaseException], Exit], ...] = (
     (SkillFailure, Exit.FAILED),
     (UnsolvableError, Exit.REFUSED),
     (PlanningError, Exit.FAILED),
-    (RemoteTaskError, Exit.FAILED),
     (ValidationError, Exit.REFUSED),
     (OntologyError, Exit.REFUSED),
     (SkillError, Exit.REFUSED),
@@ -93,10 +95,23 @@ _CODES: tuple[tuple[type[BaseException], Exit], ...] = (
     (MeshlinkError, Exit.REFUSED),
 )
 
+#: A service's error reply by its generic code; other codes name what was refused (an unknown
+#: task, a task id taken, a malformed request).
+_BY_WIRE_CODE = {
+    BAD_REQUEST: Exit.REFUSED,
+    TOO_LARGE: Exit.REFUSED,
+    INTERNAL: Exit.FAILED,
+    UNAVAILABLE: Exit.UNREACHABLE,
+}
+
 
 def exit_code(error: BaseException) -> Exit:
     """The code of an error: unreachable for no reply in time, refused for bad input and
     unknown names, failed for what ran and did not succeed (:class:`Exit`)."""
+    if isinstance(error, RequestError | RemoteTaskError):  # by the service's wire code
+        return _BY_WIRE_CODE.get(error.code, Exit.REFUSED)
+    if isinstance(error, RemoteSkillError | WmRemoteError):
+        return _BY_WIRE_CODE.get(error.remote_code, Exit.FAILED)
     for kind, code in _CODES:
         if isinstance(error, kind):
             return code

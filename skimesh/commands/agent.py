@@ -27,7 +27,7 @@ from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
 from wm_store import WmClient, WmError, ZenohTransport
-from wm_store.ontology import TYPED_KINDS
+from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
 
 from ..errors import Exit, SkimeshError
@@ -288,7 +288,7 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
             interrupted.append(True)
             raise
         except AgentTransportError as e:
-            print(f"error: {e}", file=sys.stderr)
+            print(f"error: {await _not_alive(args) or e}", file=sys.stderr)
             return EXIT_UNREACHABLE
         except TimeoutError:
             print(f"error: no result within {args.deadline:g} s (run stopped)", file=sys.stderr)
@@ -305,6 +305,26 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
         print("interrupted (a run in flight was stopped)", file=sys.stderr)
         return EXIT_INTERRUPTED
     return code
+
+
+async def _not_alive(args: argparse.Namespace) -> str:
+    """For an agent that did not answer: "no agent X is alive", naming the closest live agents
+    (from the liveliness tokens, at once), or "" when X is alive or the mesh cannot tell."""
+    name = getattr(args, "agent", None)
+    if not name:
+        return ""
+    try:
+        async with mesh_session(args) as mesh:
+            alive = await list_agents(mesh, timeout=min(args.timeout, 2.0))
+    except MeshlinkError:
+        return ""
+    if name in alive:
+        return ""
+    where = f"mesh {args.mesh!r}"
+    if not alive:
+        return f"no agent is alive on {where} (is `skimesh agent` running there?)"
+    hint = did_you_mean(name, alive).rstrip(".")
+    return f"no agent {name!r} is alive on {where}{hint} (alive: {', '.join(alive)})"
 
 
 def _print_json(obj: object) -> None:

@@ -54,7 +54,7 @@ def _run(args: argparse.Namespace) -> int:
             )
             # Zenoh keeps retrying a router's connect endpoints: the others may start later
             linked = f", connecting to {', '.join(connect)}" if connect else ""
-            logging.getLogger("skimesh").warning("router listening on %s%s", where, linked)
+            logging.getLogger("skimesh.router").info("router listening on %s%s", where, linked)
         return 0
 
     return run_service(main)

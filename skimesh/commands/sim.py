@@ -93,7 +93,7 @@ def _run(args: argparse.Namespace) -> int:
                     await tg.start(serve, mesh, devices)
                     await tg.start(serve_truth, mesh, SimTruth(world))
                     names = ", ".join(f"{o}/{d}" for o, d in devices)
-                    _log.warning(
+                    _log.info(
                         "sim: scenario %s (%s), serving %s on mesh %s",
                         scenario.name,
                         "fast" if args.fast else "real time",

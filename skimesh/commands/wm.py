@@ -99,8 +99,9 @@ def _serve(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         store = await WmStore.open(Ontology.default(), config)
-        if store.recovery_detail:
-            _log.warning("recovery: %s", store.recovery_detail)
+        if detail := store.recovery_detail:  # a clean log is news only with -v
+            clean = detail.startswith("clean:") and ";" not in detail
+            _log.log(logging.INFO if clean else logging.WARNING, "recovery: %s", detail)
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             await tg.start(serve_store, mesh, store)
             for name, text in terms:
@@ -113,7 +114,7 @@ def _serve(args: argparse.Namespace) -> int:
                 await store.transact(Transact(ops=ops, author="scene-import"))
             if scenario is not None:
                 await _load_scenario(store, scenario)
-            _log.warning(
+            _log.info(
                 "world model ready: revision %d, %d elements on mesh %r",
                 store.revision,
                 len(store.state.elements),
@@ -140,7 +141,7 @@ async def _load_scenario(store: WmStore, scenario: Scenario) -> None:
         if ops:  # its ontology terms, in case the files gained some since
             await store.transact(Transact(ops=ops, author="scenario-import"))
         shown = ", ".join(there[:3])
-        _log.warning("scenario %r: its scene is in the store already (%s)", scenario.name, shown)
+        _log.info("scenario %r: its scene is in the store already (%s)", scenario.name, shown)
         return
     reply = await store.transact(Transact(ops=ops, author="scenario-import"))
-    _log.warning("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)
+    _log.info("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)
