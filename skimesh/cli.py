@@ -64,9 +64,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: The long-running commands: their own progress lines (``skimesh.*`` loggers, level INFO) show
-#: by default; a client command shows warnings and errors only.
+#: The long-running commands: the INFO lines of their own loggers (ready, stopped, ...) show by
+#: default; a client command shows warnings and errors only.
 _SERVICES = frozenset({"router", "wm", "sim", "agent", "task-agent"})
+_SERVICE_LOGGERS = ("skimesh", "skill_agent.server", "task_agent.service", "task_agent.operator")
 
 
 def _is_service(args: argparse.Namespace) -> bool:
@@ -96,7 +97,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_logging(args.verbose)
     if _is_service(args) and not args.verbose:  # a service says it is ready, as ROS 2 nodes do
-        logging.getLogger("skimesh").setLevel(logging.INFO)
+        for name in _SERVICE_LOGGERS:
+            logging.getLogger(name).setLevel(logging.INFO)
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
