@@ -400,6 +400,9 @@ async def _skills(args: argparse.Namespace) -> int:
             }
         else:
             replies = await find_skills(mesh, timeout=args.timeout)
+    if not replies:
+        print(f"skimesh skills: no agent answered on mesh {args.mesh!r}", file=sys.stderr)
+        return EXIT_UNREACHABLE
     if args.json:
         _print_json({agent: reply.skills for agent, reply in replies.items()})
         return 0
