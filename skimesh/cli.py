@@ -1,21 +1,51 @@
 """The ``skimesh`` command: one entry point for every service and tool.
 
 Run ``skimesh --help`` for the list; every sub-command has its own ``--help``.
+
+Start-up time: ``skimesh --help`` and ``--version`` import no command module (the list below
+names each command with its one-line help), and a command imports only the module that adds
+it (:data:`COMMANDS`); errors are classified (:mod:`skimesh.errors`) only when one happened.
 """
 
 from __future__ import annotations
 
 import argparse
-import logging
+import importlib
 import sys
-import traceback
 from collections.abc import Sequence
 
-from .commands import agent, demo, router, sim, task, wm
-from .errors import USER_ERRORS, Exit, exit_code
-from .runtime import configure_logging
+__all__ = ["COMMANDS", "build_parser", "describe_error", "main"]
 
-__all__ = ["build_parser", "describe_error", "main"]
+#: Every top-level command, in the order of ``skimesh --help``: the module of
+#: :mod:`skimesh.commands` that adds it (its ``add_parser``) and its one-line help, the same as
+#: that module's (a test compares them).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "router": (
+        "router",
+        "run a Zenoh router (one per site or host; agents and tools connect to it)",
+    ),
+    "wm": ("wm", "run the world-model store, or read/write it (ls, get, tree, query, ...)"),
+    "agent": (
+        "agent",
+        "run the skill agent of a robot or smart device (or several, in one process)",
+    ),
+    "agents": ("agent", "list skill agents: alive (liveliness) and in the WM"),
+    "skills": ("agent", "list the skills of one agent or of all agents"),
+    "run": ("agent", "run a skill on an agent and stream its progress until the result"),
+    "reload": ("agent", "re-import an agent's skill plug-ins (runs in flight keep their code)"),
+    "stop": ("agent", "stop a run (the skill brings its hardware to safety)"),
+    "demo": ("demo", "the whole mission in one process, on loopback"),
+    "sim": ("sim", "simulate a scenario's world and serve its devices on the mesh"),
+    "task-agent": (
+        "task",
+        "run the task agent: planning, multi-robot execution, the operator agent",
+    ),
+    "task": ("task", "submit, follow, list and abort tasks"),
+    "operator": ("task", "list the steps waiting for a person and answer them (semi-autonomy)"),
+}
+
+#: Every command module, in the order they add their commands.
+MODULES = ("router", "wm", "agent", "demo", "sim", "task")
 
 
 class _Version(argparse.Action):
@@ -36,7 +66,10 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of every command; given the command line ``argv``, only what it needs: the
+    module of the command it names, or the list of commands alone when it names none (or one
+    no module is known to add: then every module, as without ``argv``)."""
     parser = argparse.ArgumentParser(
         prog="skimesh",
         description="skimesh: a Zenoh-distributed multi-robot skill mesh. Start with "
@@ -55,13 +88,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action=_Version, help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    router.add_parser(sub)
-    wm.add_parser(sub)
-    agent.add_parser(sub)
-    demo.add_parser(sub)
-    sim.add_parser(sub)
-    task.add_parser(sub)
+    named = _command_in(argv) if argv is not None else None
+    wanted: tuple[str, ...] = () if argv is not None and named is None else MODULES
+    if named in COMMANDS:
+        wanted = (COMMANDS[named][0],)
+    for module in MODULES:
+        if module in wanted:
+            importlib.import_module(f".commands.{module}", __package__).add_parser(sub)
+        else:  # only listed (--help, --version, a usage error): not run
+            for name, (where, text) in COMMANDS.items():
+                if where == module:
+                    sub.add_parser(name, help=text)
     return parser
+
+
+def _command_in(argv: Sequence[str]) -> str | None:
+    """The command ``argv`` names: its first word that is no option (the global options take
+    no value), or None."""
+    return next((arg for arg in argv if not arg.startswith("-")), None)
 
 
 #: The long-running commands: the INFO lines of their own loggers (ready, stopped, ...) show by
@@ -93,37 +137,46 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; its exit code (:class:`skimesh.errors.Exit`). An error a user can act
     on is one line on stderr (with its traceback under ``--debug``); any other error is a bug
     and shows its traceback."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv).parse_args(argv)
+    _configure_logging(args)
+    try:
+        return int(args.func(args))
+    except KeyboardInterrupt:
+        return 130  # Exit.INTERRUPTED
+    except BaseException as error:
+        return _one_line(error, args)  # or raises it again: a bug
+
+
+def _configure_logging(args: argparse.Namespace) -> None:
+    import logging
+
+    from .runtime import configure_logging
+
     configure_logging(args.verbose)
     if _is_service(args) and not args.verbose:  # a service says it is ready, as ROS 2 nodes do
         for name in _SERVICE_LOGGERS:
             logging.getLogger(name).setLevel(logging.INFO)
-    try:
-        return int(args.func(args))
-    except KeyboardInterrupt:
-        return Exit.INTERRUPTED
-    except (*USER_ERRORS, SystemExit, BaseExceptionGroup) as error:  # type: ignore[misc]  # a tuple: mypy misreads the unpacking
-        leaves = _leaves(error)
-        if not all(_for_the_user(leaf) for leaf in leaves):
-            raise
-        if args.debug:
-            traceback.print_exc()
-        for leaf in leaves:
-            print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
-        return max(_code(leaf) for leaf in leaves)
 
 
-def _for_the_user(error: BaseException) -> bool:
-    """An error a user can act on: one of :data:`USER_ERRORS`, or a command's usage error as
-    text (``SystemExit("--set takes PROP=VALUE, ...")``)."""
-    return isinstance(error, USER_ERRORS) or (
-        isinstance(error, SystemExit) and isinstance(error.code, str)
-    )
+def _one_line(error: BaseException, args: argparse.Namespace) -> int:
+    """An error a user can act on, as one line per error on stderr; its exit code. Any other
+    error (a bug, a SystemExit with a code) propagates."""
+    from .errors import Exit, exit_code, user_errors
 
+    known = user_errors()
 
-def _code(error: BaseException) -> int:
-    return Exit.REFUSED if isinstance(error, SystemExit) else exit_code(error)
+    leaves = _leaves(error)
+    usage = [isinstance(e, SystemExit) and isinstance(e.code, str) for e in leaves]
+    if not all(u or isinstance(e, known) for e, u in zip(leaves, usage, strict=True)):
+        raise error
+    if args.debug:
+        import traceback
+
+        traceback.print_exception(error)
+    for leaf in leaves:
+        print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
+    return max(Exit.REFUSED if u else exit_code(e) for e, u in zip(leaves, usage, strict=True))
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 :class:`SkimeshError` is the root of the application's errors. :class:`Exit` is what every
 ``skimesh`` command exits with (the README's "Exit codes" table), and :func:`exit_code` tells
-which code an error a user can act on gets; :data:`USER_ERRORS` are those errors (the packages'
+which code an error a user can act on gets; :func:`user_errors` are those errors (the packages'
 roots): the command line prints them as one line, with a traceback only under ``--debug``.
 """
 
@@ -10,22 +10,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from device_drivers import DeviceError, DeviceUnavailableError
-from meshlink import MeshlinkError, NoReplyError, SessionError
-from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, UNAVAILABLE
-from skill_agent import AgentTransportError, RemoteSkillError, SkillError, SkillFailure
-from task_agent import (
-    PlanningError,
-    RemoteTaskError,
-    RequestError,
-    TaskError,
-    TaskTransportError,
-    UnsolvableError,
-)
-from wm_store import OntologyError, TransportError, ValidationError, WmError
-from wm_store import RemoteError as WmRemoteError
-
-__all__ = ["USER_ERRORS", "DemoError", "Exit", "SkimeshError", "UsageError", "exit_code"]
+__all__ = ["DemoError", "Exit", "SkimeshError", "UsageError", "exit_code", "user_errors"]
 
 
 class Exit(IntEnum):
@@ -62,57 +47,67 @@ class UsageError(SkimeshError):
     """A command line or input file the command cannot use (exit :attr:`Exit.REFUSED`)."""
 
 
-#: Errors a user can act on: one line on stderr and the code :func:`exit_code` gives.
-USER_ERRORS: tuple[type[Exception], ...] = (
-    MeshlinkError,
-    WmError,
-    SkillError,
-    TaskError,
-    DeviceError,
-    SkimeshError,
-    OSError,
-)
+def user_errors() -> tuple[type[Exception], ...]:
+    """The errors a user can act on (the packages' roots): one line on stderr and the code
+    :func:`exit_code` gives. Imported when an error happened (start-up time)."""
+    from device_drivers import DeviceError
+    from meshlink import MeshlinkError
+    from skill_agent import SkillError
+    from task_agent import TaskError
+    from wm_store import WmError
 
-#: Most specific first: the first class an error is an instance of gives its code.
-_CODES: tuple[tuple[type[BaseException], Exit], ...] = (
-    (NoReplyError, Exit.UNREACHABLE),
-    (SessionError, Exit.UNREACHABLE),
-    (TransportError, Exit.UNREACHABLE),
-    (AgentTransportError, Exit.UNREACHABLE),
-    (TaskTransportError, Exit.UNREACHABLE),
-    (DeviceUnavailableError, Exit.UNREACHABLE),
-    (TimeoutError, Exit.UNREACHABLE),
-    (ConnectionError, Exit.UNREACHABLE),
-    (SkillFailure, Exit.FAILED),
-    (UnsolvableError, Exit.REFUSED),
-    (PlanningError, Exit.FAILED),
-    (ValidationError, Exit.REFUSED),
-    (OntologyError, Exit.REFUSED),
-    (SkillError, Exit.REFUSED),
-    (TaskError, Exit.REFUSED),
-    (SkimeshError, Exit.REFUSED),
-    (FileNotFoundError, Exit.REFUSED),
-    (MeshlinkError, Exit.REFUSED),
-)
-
-#: A service's error reply by its generic code; other codes name what was refused (an unknown
-#: task, a task id taken, a malformed request).
-_BY_WIRE_CODE = {
-    BAD_REQUEST: Exit.REFUSED,
-    TOO_LARGE: Exit.REFUSED,
-    INTERNAL: Exit.FAILED,
-    UNAVAILABLE: Exit.UNREACHABLE,
-}
+    return (MeshlinkError, WmError, SkillError, TaskError, DeviceError, SkimeshError, OSError)
 
 
 def exit_code(error: BaseException) -> Exit:
     """The code of an error: unreachable for no reply in time, refused for bad input and
     unknown names, failed for what ran and did not succeed (:class:`Exit`)."""
-    if isinstance(error, RequestError | RemoteTaskError):  # by the service's wire code
-        return _BY_WIRE_CODE.get(error.code, Exit.REFUSED)
+    from device_drivers import DeviceUnavailableError
+    from meshlink import MeshlinkError, NoReplyError, SessionError
+    from meshlink.rpc import BAD_REQUEST, INTERNAL, TOO_LARGE, UNAVAILABLE
+    from skill_agent import AgentTransportError, RemoteSkillError, SkillError, SkillFailure
+    from task_agent import (
+        PlanningError,
+        RemoteTaskError,
+        RequestError,
+        TaskError,
+        TaskTransportError,
+        UnsolvableError,
+    )
+    from wm_store import OntologyError, TransportError, ValidationError
+    from wm_store import RemoteError as WmRemoteError
+
+    by_wire_code = {  # a service's error reply by its generic code
+        BAD_REQUEST: Exit.REFUSED,
+        TOO_LARGE: Exit.REFUSED,
+        INTERNAL: Exit.FAILED,
+        UNAVAILABLE: Exit.UNREACHABLE,
+    }
+    if isinstance(error, RequestError | RemoteTaskError):  # other codes name what was refused
+        return by_wire_code.get(error.code, Exit.REFUSED)  # (an unknown task, a taken id)
     if isinstance(error, RemoteSkillError | WmRemoteError):
-        return _BY_WIRE_CODE.get(error.remote_code, Exit.FAILED)
-    for kind, code in _CODES:
+        return by_wire_code.get(error.remote_code, Exit.FAILED)
+    kinds: tuple[tuple[type[BaseException], Exit], ...] = (  # the most specific first
+        (NoReplyError, Exit.UNREACHABLE),
+        (SessionError, Exit.UNREACHABLE),
+        (TransportError, Exit.UNREACHABLE),
+        (AgentTransportError, Exit.UNREACHABLE),
+        (TaskTransportError, Exit.UNREACHABLE),
+        (DeviceUnavailableError, Exit.UNREACHABLE),
+        (TimeoutError, Exit.UNREACHABLE),
+        (ConnectionError, Exit.UNREACHABLE),
+        (SkillFailure, Exit.FAILED),
+        (UnsolvableError, Exit.REFUSED),
+        (PlanningError, Exit.FAILED),
+        (ValidationError, Exit.REFUSED),
+        (OntologyError, Exit.REFUSED),
+        (SkillError, Exit.REFUSED),
+        (TaskError, Exit.REFUSED),
+        (SkimeshError, Exit.REFUSED),
+        (FileNotFoundError, Exit.REFUSED),
+        (MeshlinkError, Exit.REFUSED),
+    )
+    for kind, code in kinds:
         if isinstance(error, kind):
             return code
     return Exit.FAILED  # a storage fault, a service's internal error, a device's fault

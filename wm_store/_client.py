@@ -64,11 +64,11 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.reasoners import SpatialReasoner, classify, identify
 from wm_store.scene import match_relations, resolve
 
 if TYPE_CHECKING:
     from wm_store.ontology import Ontology
+    from wm_store.reasoners import SpatialReasoner
 
 __all__ = ["WmClient"]
 
@@ -196,16 +196,21 @@ class WmClient:
     ) -> list[tuple[str, float]]:
         """Default individuals (templates) of ``candidates_type`` that ``element`` resembles,
         with similarity scores >= ``threshold``, best first (SkiROS ``classify``)."""
-        state = self.replica.state
-        return classify(state, self.ontology, element, candidates_type, threshold)
+        from wm_store.reasoners import classify  # the reasoners load when first used
+
+        return classify(self.replica.state, self.ontology, element, candidates_type, threshold)
 
     def identify(self, observed: Element, threshold: float = 0.5) -> list[tuple[str, float]]:
         """Existing elements that ``observed`` may be, best first (SkiROS ``identify``)."""
+        from wm_store.reasoners import identify
+
         return identify(self.replica.state, self.ontology, observed, threshold)
 
     @property
     def spatial(self) -> SpatialReasoner:
         """Poses in the world frame, relative poses, inside/on tests over the replica."""
+        from wm_store.reasoners import SpatialReasoner
+
         return SpatialReasoner(self.replica.state, self.ontology)
 
     # ------------------------------------------------------------------ remote reads

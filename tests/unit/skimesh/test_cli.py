@@ -173,3 +173,23 @@ def test_light_commands_load_no_planner_simulator_viewer_or_rdflib(name: str) ->
     code, loaded = done.stdout.strip().splitlines()[-1].split(" ", 1)
     assert loaded == "[]", done.stdout + done.stderr
     assert code == ("0" if "help" in name or name == "version" else "3"), done.stderr
+
+
+def test_the_list_of_commands_is_the_modules() -> None:
+    """``skimesh --help`` lists the commands from ``cli.COMMANDS`` without importing their
+    modules: every command a module adds is there, with the module's help, in its order."""
+    import argparse
+
+    from skimesh.cli import COMMANDS
+
+    def listed(parser: argparse.ArgumentParser) -> dict[str, object]:
+        (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return {c.dest: c.help for c in sub._choices_actions}
+
+    full = listed(build_parser())
+    assert full == {name: text for name, (_, text) in COMMANDS.items()}
+    assert list(full) == list(COMMANDS)
+    assert listed(build_parser(["--help"])) == full
+    for name, (module, _) in COMMANDS.items():
+        args = build_parser([name, "--help"])
+        assert listed(args) == full, f"{name} ({module})"
