@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import sys
 from collections.abc import Sequence
 
@@ -149,14 +150,31 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _configure_logging(args: argparse.Namespace) -> None:
-    import logging
-
     from .runtime import configure_logging
 
     configure_logging(args.verbose)
     if _is_service(args) and not args.verbose:  # a service says it is ready, as ROS 2 nodes do
         for name in _SERVICE_LOGGERS:
             logging.getLogger(name).setLevel(logging.INFO)
+    if not args.debug:
+        for handler in logging.getLogger().handlers:
+            handler.addFilter(_expected_in_one_line)
+
+
+def _expected_in_one_line(record: logging.LogRecord) -> bool:
+    """A log record of an expected error (a device that does not answer, an unknown name: one
+    of :func:`skimesh.errors.user_errors`) says it in one line, without its traceback (shown
+    with ``skimesh --debug``); a bug's traceback stays."""
+    error = record.exc_info[1] if record.exc_info else None
+    if error is None:
+        return True
+    from .errors import user_errors
+
+    if all(isinstance(leaf, user_errors()) for leaf in _leaves(error)):
+        said = "; ".join(f"{type(e).__name__}: {describe_error(e)}" for e in _leaves(error))
+        record.msg, record.args = f"{record.getMessage()}: {said}", ()
+        record.exc_info, record.exc_text = None, None
+    return True
 
 
 def _one_line(error: BaseException, args: argparse.Namespace) -> int:

@@ -122,3 +122,26 @@ def test_a_bug_still_shows_its_traceback(monkeypatch: pytest.MonkeyPatch) -> Non
     _router_raises(monkeypatch, KeyError("bug"))
     with pytest.raises(KeyError):
         cli.main(["router"])
+
+
+def test_an_expected_error_is_logged_in_one_line_a_bug_with_its_traceback() -> None:
+    import io
+    import logging
+
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    handler.addFilter(cli._expected_in_one_line)
+    log = logging.getLogger("test.one-line")
+    log.addHandler(handler)
+    log.propagate = False
+    try:
+        for error in (DeviceUnavailableError("r2-base: no reply"), KeyError("bug")):
+            try:
+                raise error
+            except Exception:
+                log.exception("run %s: on_preempt failed", "r-1")
+    finally:
+        log.removeHandler(handler)
+    first, *rest = stream.getvalue().splitlines()
+    assert first == ("run r-1: on_preempt failed: DeviceUnavailableError: r2-base: no reply"), first
+    assert rest[0] == "run r-1: on_preempt failed" and "Traceback" in rest[1], rest
