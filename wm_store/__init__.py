@@ -35,8 +35,7 @@ a command that names no client starts without the ontology (rdflib), the store o
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
@@ -62,6 +61,7 @@ from ._errors import UnknownRelationError as UnknownRelationError
 from ._errors import UnknownTemplateError as UnknownTemplateError
 from ._errors import ValidationError as ValidationError
 from ._errors import WmError as WmError
+from ._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from ._batches import transact_in_batches as transact_in_batches
@@ -79,30 +79,25 @@ if TYPE_CHECKING:
     from ._zenoh_transport import ZenohTransport as ZenohTransport
     from .scene._names import display_name as display_name
 
-#: The names imported on first use (PEP 562), and their modules.
-_LAZY: dict[str, str] = {
-    "transact_in_batches": "._batches",
-    "WmClient": "._client",
-    "describe_change": "._describe",
-    "DeviceSpec": "._registration",
-    "RobotRegistration": "._registration",
-    "SkillSpec": "._registration",
-    "registration_ops": "._registration",
-    "unregistration_ops": "._registration",
-    "Replica": "._replica",
-    "ReplicaStats": "._replica",
-    "InMemoryTransport": "._transport",
-    "WmTransport": "._transport",
-    "ZenohTransport": "._zenoh_transport",
-    "display_name": ".scene._names",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value = getattr(importlib.import_module(_LAZY[name], __name__), name)
-    return value
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "transact_in_batches": "._batches",
+        "WmClient": "._client",
+        "describe_change": "._describe",
+        "DeviceSpec": "._registration",
+        "RobotRegistration": "._registration",
+        "SkillSpec": "._registration",
+        "registration_ops": "._registration",
+        "unregistration_ops": "._registration",
+        "Replica": "._replica",
+        "ReplicaStats": "._replica",
+        "InMemoryTransport": "._transport",
+        "WmTransport": "._transport",
+        "ZenohTransport": "._zenoh_transport",
+        "display_name": ".scene._names",
+    },
+)
 
 
 __all__ = [

@@ -25,8 +25,9 @@ loads on first use (PEP 562 ``__getattr__``): rdflib is imported with the first 
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from wm_store._lazy import lazy_getattr
 
 from ._terms import ALL_KINDS as ALL_KINDS
 from ._terms import TYPED_KINDS as TYPED_KINDS
@@ -58,29 +59,24 @@ if TYPE_CHECKING:
     from ._teaching import replay as replay
     from ._teaching import text_digest as text_digest
 
-#: The names imported on first use (PEP 562), and their modules.
-_LAZY: dict[str, str] = {
-    "literal_from_value": "._literals",
-    "value_from_literal": "._literals",
-    "CORE_FILE": "._ontology",
-    "NAMESPACE": "._ontology",
-    "ONTOLOGY_IRI": "._ontology",
-    "Ontology": "._ontology",
-    "core_ontology_path": "._ontology",
-    "MAX_TERMS_BYTES": "._teaching",
-    "parse_terms": "._teaching",
-    "property_turtle": "._teaching",
-    "relation_turtle": "._teaching",
-    "replay": "._teaching",
-    "text_digest": "._teaching",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value = getattr(importlib.import_module(_LAZY[name], __name__), name)
-    return value
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "literal_from_value": "._literals",
+        "value_from_literal": "._literals",
+        "CORE_FILE": "._ontology",
+        "NAMESPACE": "._ontology",
+        "ONTOLOGY_IRI": "._ontology",
+        "Ontology": "._ontology",
+        "core_ontology_path": "._ontology",
+        "MAX_TERMS_BYTES": "._teaching",
+        "parse_terms": "._teaching",
+        "property_turtle": "._teaching",
+        "relation_turtle": "._teaching",
+        "replay": "._teaching",
+        "text_digest": "._teaching",
+    },
+)
 
 
 __all__ = [

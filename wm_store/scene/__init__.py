@@ -16,8 +16,9 @@ Transactions (``_transactions``, which read Turtle with rdflib) load on first us
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from wm_store._lazy import lazy_getattr
 
 from ._cardinality import min_cardinality_violations as min_cardinality_violations
 from ._query import id_sort_key as id_sort_key
@@ -35,19 +36,14 @@ if TYPE_CHECKING:
     from ._transactions import TxnResult as TxnResult
     from ._transactions import apply_transaction as apply_transaction
 
-#: The names imported on first use (PEP 562), and their modules.
-_LAZY: dict[str, str] = {
-    "SELF": "._transactions",
-    "TxnResult": "._transactions",
-    "apply_transaction": "._transactions",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value = getattr(importlib.import_module(_LAZY[name], __name__), name)
-    return value
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "SELF": "._transactions",
+        "TxnResult": "._transactions",
+        "apply_transaction": "._transactions",
+    },
+)
 
 
 __all__ = [
