@@ -19,14 +19,27 @@ import anyio
 import msgspec
 
 from meshlink import add_mesh_arguments
-from wm_store import ElementNotFoundError, WmClient, transact_in_batches
+from wm_store import (
+    ElementNotFoundError,
+    RemoteError,
+    WmClient,
+    ZenohTransport,
+    transact_in_batches,
+)
 from wm_store.ontology import did_you_mean
-from wm_store.protocol import Element, PropertyFilter, Query
+from wm_store.protocol import (
+    Element,
+    ElementsReply,
+    GetElements,
+    PropertyFilter,
+    Query,
+    Resolve,
+)
 from wm_store.scene import SceneState, id_sort_key
 
 from ..errors import UsageError
 from ..runtime import run_service
-from ._connect import wm_session
+from ._connect import mesh_session, wm_session
 from ._edit import add_edit_commands
 from ._render import element_line, render_tree
 from ._teach import add_ontology_commands
@@ -95,9 +108,7 @@ def _add_read_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]
         json_help=None,
     )
     get.add_argument("ids", nargs="+", metavar="ID", help="element id, e.g. Gear-1")
-    get.set_defaults(
-        func=lambda a: _client(a, lambda wm: _print_json([_element(wm, i) for i in a.ids]))
-    )
+    get.set_defaults(func=_get)
 
     tree = _command(
         cmds,
@@ -222,6 +233,27 @@ def _element(wm: WmClient, element_id: str) -> Element:
         hint = did_you_mean(element_id, wm.replica.state.elements)
         raise ElementNotFoundError(f"no element {element_id!r} in the world model{hint}")
     return found
+
+
+def _get(args: argparse.Namespace) -> int:
+    """``wm get``: one read from the store, no replica (no snapshot, no ontology: start-up
+    time); an unknown id names the closest ids the store has."""
+
+    async def main() -> int:
+        async with mesh_session(args) as mesh:
+            transport = ZenohTransport(mesh)
+            reply = await transport.request(GetElements(ids=args.ids), timeout=args.timeout)
+            if isinstance(reply, ElementsReply):
+                return await _print_json(reply.elements)
+            listing = await transport.request(Resolve(query=Query()), timeout=args.timeout)
+        known = [e.id for e in listing.elements] if isinstance(listing, ElementsReply) else []
+        missing = [i for i in args.ids if i not in known]
+        if not known or not missing:  # the store's own error (an ACL, a fault)
+            raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
+        said = [f"no element {i!r} in the world model{did_you_mean(i, known)}" for i in missing]
+        raise ElementNotFoundError("; ".join(said))
+
+    return run_service(main)
 
 
 def _client(args: argparse.Namespace, body: Body) -> int:

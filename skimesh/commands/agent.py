@@ -26,13 +26,14 @@ from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
-from wm_store import WmClient, WmError, ZenohTransport
+from wm_store import WmError
 from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
 
 from ..errors import Exit, SkimeshError
 from ..runtime import run_service
 from ._connect import mesh_session
+from ._wm_reads import registered_agents
 
 if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
     from skill_agent.runtime import AgentConfig
@@ -343,16 +344,8 @@ async def _agents(args: argparse.Namespace) -> int:
         alive = set(await list_agents(mesh, timeout=args.timeout))
         registered: dict[str, dict[str, object]] = {}
         reached = True
-        try:
-            async with WmClient.connect(ZenohTransport(mesh), timeout=args.timeout) as wm:
-                for agent in wm.resolve_element(type="Agent"):
-                    robots = [r.object for r in wm.query_relation(agent.id, "controls")]
-                    registered[agent.label] = {
-                        "element": agent.id,
-                        "available": bool(agent.properties.get("available", False)),
-                        "robot": robots[0] if robots else "",
-                        "skills": len(wm.query_relation(agent.id, "hasSkill")),
-                    }
+        try:  # three reads from the store: no replica, no ontology to load (start-up time)
+            registered = await registered_agents(mesh, timeout=args.timeout)
         except WmError as e:
             reached = False
             print(f"warning: world model unreachable ({e}); liveliness only", file=sys.stderr)

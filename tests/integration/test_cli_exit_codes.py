@@ -115,6 +115,28 @@ def test_nothing_answers_on_an_empty_mesh(module_router: str, command: str) -> N
     assert len(done.stderr.strip().splitlines()) <= 2 and "Traceback" not in done.stderr
 
 
+LIGHT = ["agents", "skills r1", "wm get Gear-1", "task status t-nothing"]
+HEAVY = ("unified_planning", "mujoco", "placo", "rerun", "rdflib")
+
+
+@pytest.mark.parametrize("command", LIGHT)
+def test_light_commands_on_a_mesh_load_no_heavy_package(site: list[str], command: str) -> None:
+    """The light commands, answered by the mesh, import neither the planners, the simulator,
+    the viewer nor rdflib (``wm get`` and ``agents`` ask the store, they load no replica)."""
+    probe = (
+        "import sys\n"
+        "from skimesh.cli import main\n"
+        f"code = main({[*command.split(), *site]!r})\n"
+        f"print(code, [m for m in {HEAVY!r} if m in sys.modules], file=sys.stderr)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT
+    )
+    code, loaded = done.stderr.strip().splitlines()[-1].split(" ", 1)
+    assert loaded == "[]", done.stderr
+    assert int(code) == (Exit.REFUSED if "t-nothing" in command else Exit.OK), done.stderr
+
+
 def test_the_simulator_starts_and_stops_cleanly(module_router: str, tmp_path: Path) -> None:
     sim = Child(
         ["-m", "skimesh", "sim", "--scenario", "kitting", "--no-rerun", "--fast",
