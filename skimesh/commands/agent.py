@@ -33,7 +33,7 @@ from wm_store.protocol import Value
 from ..errors import Exit, SkimeshError
 from ..runtime import run_service
 from ._connect import mesh_session
-from ._wm_reads import registered_agents
+from ._store_reads import registered_agents
 
 if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
     from skill_agent.runtime import AgentConfig
