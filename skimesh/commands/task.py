@@ -102,8 +102,9 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="submit a goal or a task file and follow it to its end",
         description="A succeeded goal is checked fact by fact in the world model and, when a "
         "simulator runs on the mesh, in the physics. Exit codes: 0 succeeded, 1 failed, "
-        "2 unsolvable, 3 aborted, 4 usage or other errors, 5 succeeded in the world model but "
-        "contradicted by the physics, 130 interrupted (the task is aborted first).",
+        "2 unsolvable (or a usage error, an unknown element), 3 no task agent answered, "
+        "4 aborted, 5 succeeded in the world model but contradicted by the physics, "
+        "130 interrupted (the task is aborted first).",
     )
     what = submit.add_mutually_exclusive_group(required=True)
     what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
@@ -182,7 +183,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="stop every run of a task (robots to a safe state)",
         description="Stop every run of a task; each robot is brought to a safe state. Returns "
         "once the task ended. Exit codes: 0 the task has ended (aborted now, or it had ended "
-        "already), 4 errors (no such task, no task agent, still running after the wait).",
+        "already), 1 still running after the wait, 2 no such task, 3 no task agent answered.",
     )
     abort.add_argument("task_id", metavar="TASK_ID", help="the task to stop")
     abort.add_argument(
@@ -223,7 +224,7 @@ def _follow_arguments(p: argparse.ArgumentParser) -> None:
         type=float,
         default=3600.0,
         metavar="S",
-        help="stop following after S seconds (exit 4; the task goes on; default: 3600)",
+        help="stop following after S seconds (exit 3; the task goes on; default: 3600)",
     )
     p.add_argument(
         "--no-progress",
