@@ -139,7 +139,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     on is one line on stderr (with its traceback under ``--debug``); any other error is a bug
     and shows its traceback."""
     argv = sys.argv[1:] if argv is None else argv
+    debug = "--debug" in argv  # before or after the command, as the connection options
+    argv = [arg for arg in argv if arg != "--debug"]
     args = build_parser(argv).parse_args(argv)
+    args.debug = debug
     _configure_logging(args)
     try:
         return int(args.func(args))

@@ -145,3 +145,14 @@ def test_an_expected_error_is_logged_in_one_line_a_bug_with_its_traceback() -> N
     first, *rest = stream.getvalue().splitlines()
     assert first == ("run r-1: on_preempt failed: DeviceUnavailableError: r2-base: no reply"), first
     assert rest[0] == "run r-1: on_preempt failed" and "Traceback" in rest[1], rest
+
+
+def test_debug_goes_before_or_after_the_command(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _router_raises(monkeypatch, UsageError("no config file x.json5"))
+    for argv in (["--debug", "router"], ["router", "--debug"]):
+        assert cli.main(argv) == Exit.REFUSED
+        assert "Traceback" in capsys.readouterr().err, argv
+    assert cli.main(["router"]) == Exit.REFUSED
+    assert "Traceback" not in capsys.readouterr().err
