@@ -148,3 +148,16 @@ def test_the_simulator_starts_and_stops_cleanly(module_router: str, tmp_path: Pa
         assert_clean(sim)
     finally:
         sim.kill()
+
+
+def test_the_router_starts_and_stops_cleanly() -> None:
+    from meshlink.testing import free_port
+
+    router = Child(
+        ["-m", "skimesh", "router", "--listen", f"tcp/127.0.0.1:{free_port()}"], name="router"
+    )
+    try:
+        router.wait_stderr("router listening", timeout=60)
+        assert_clean(router)
+    finally:
+        router.kill()
