@@ -18,16 +18,16 @@ last)::
     skills        the standard skill library (one module per skill family, ``module:Class``)
 
 Write a skill: docs/guides/write-a-skill.md.
+
+The face imports its errors; the skill contract and composite skills load on first use (PEP 562
+``__getattr__``), so a command line that only reports errors starts fast.
 """
 
-from ._composite import CompositeSkill as CompositeSkill
-from ._composite import Node as Node
-from ._composite import Parallel as Parallel
-from ._composite import Retry as Retry
-from ._composite import Selector as Selector
-from ._composite import Sequence as Sequence
-from ._composite import Step as Step
-from ._composite import check_composite as check_composite
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from ._errors import AgentInternalError as AgentInternalError
 from ._errors import AgentTransportError as AgentTransportError
 from ._errors import BadRequestError as BadRequestError
@@ -45,9 +45,42 @@ from ._errors import UnknownParameterError as UnknownParameterError
 from ._errors import UnknownRunError as UnknownRunError
 from ._errors import UnknownSkillError as UnknownSkillError
 from ._errors import UnspecifiedParameterError as UnspecifiedParameterError
-from ._skill import Skill as Skill
-from ._skill import SkillContext as SkillContext
-from ._skill import WorldView as WorldView
+
+if TYPE_CHECKING:
+    from ._composite import CompositeSkill as CompositeSkill
+    from ._composite import Node as Node
+    from ._composite import Parallel as Parallel
+    from ._composite import Retry as Retry
+    from ._composite import Selector as Selector
+    from ._composite import Sequence as Sequence
+    from ._composite import Step as Step
+    from ._composite import check_composite as check_composite
+    from ._skill import Skill as Skill
+    from ._skill import SkillContext as SkillContext
+    from ._skill import WorldView as WorldView
+
+#: The names imported on first use (PEP 562), and their modules.
+_LAZY: dict[str, str] = {
+    "CompositeSkill": "._composite",
+    "Node": "._composite",
+    "Parallel": "._composite",
+    "Retry": "._composite",
+    "Selector": "._composite",
+    "Sequence": "._composite",
+    "Step": "._composite",
+    "check_composite": "._composite",
+    "Skill": "._skill",
+    "SkillContext": "._skill",
+    "WorldView": "._skill",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    return value
+
 
 __all__ = [
     "AgentInternalError",

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Mapping
-from typing import Annotated, ClassVar, Literal, Protocol, TypeAlias
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal, Protocol, TypeAlias
 
 import anyio
 import msgspec
@@ -37,8 +37,10 @@ from skill_agent._errors import SkillError, SkillFailure, SkillLoadError, leaves
 from skill_agent._skill import Skill, SkillContext
 from skill_agent.protocol._runs import RunResult
 from skill_agent.protocol._skills import ParamSpec, SkillDescription
-from wm_store.ontology import Ontology
 from wm_store.protocol import Value
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = [
     "ChildContext",

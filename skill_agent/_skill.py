@@ -36,11 +36,13 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from typing import ClassVar, Protocol, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, ClassVar, Protocol, TypeVar, runtime_checkable
 
 from skill_agent.protocol._skills import SkillDescription
-from wm_store.ontology import Ontology
 from wm_store.protocol import Element, Op, Query, Relation, Value
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["Skill", "SkillContext", "WorldView"]
 

@@ -398,7 +398,7 @@ async def serve_tasks(
             )
         await tg.start(service.run)
         await tg.start(mesh.serve, keys.tasks_rpc(), service.rpc.serve_on(keys.tasks_rpc()))
-        _log.warning(
+        _log.info(
             "task agent ready on mesh %r: %d agents available (%s)%s",
             keys.mesh,
             len(discovery.agents()),

@@ -28,11 +28,15 @@ Only the adapters talk to the network: ``_zenoh_transport`` (:class:`ZenohTransp
 ``server/_zenoh``, ``server/_presence`` (:func:`~wm_store.server.serve_store`, agent presence).
 The core uses only :mod:`meshlink.rpc`, which opens no session: the error reply every service
 speaks, request decoding and handling, and raising an error reply by its code.
+
+The face imports its errors; every other name loads on first use (PEP 562 ``__getattr__``), so
+a command that names no client starts without the ontology (rdflib), the store or the reasoners.
 """
 
-from ._batches import transact_in_batches as transact_in_batches
-from ._client import WmClient as WmClient
-from ._describe import describe_change as describe_change
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from ._errors import CardinalityError as CardinalityError
 from ._errors import ConflictError as ConflictError
 from ._errors import CorruptLogError as CorruptLogError
@@ -58,17 +62,44 @@ from ._errors import UnknownRelationError as UnknownRelationError
 from ._errors import UnknownTemplateError as UnknownTemplateError
 from ._errors import ValidationError as ValidationError
 from ._errors import WmError as WmError
-from ._registration import DeviceSpec as DeviceSpec
-from ._registration import RobotRegistration as RobotRegistration
-from ._registration import SkillSpec as SkillSpec
-from ._registration import registration_ops as registration_ops
-from ._registration import unregistration_ops as unregistration_ops
-from ._replica import Replica as Replica
-from ._replica import ReplicaStats as ReplicaStats
-from ._transport import InMemoryTransport as InMemoryTransport
-from ._transport import WmTransport as WmTransport
-from ._zenoh_transport import ZenohTransport as ZenohTransport
-from .scene._names import display_name as display_name
+from ._lazy import lazy_getattr
+
+if TYPE_CHECKING:
+    from ._batches import transact_in_batches as transact_in_batches
+    from ._client import WmClient as WmClient
+    from ._describe import describe_change as describe_change
+    from ._registration import DeviceSpec as DeviceSpec
+    from ._registration import RobotRegistration as RobotRegistration
+    from ._registration import SkillSpec as SkillSpec
+    from ._registration import registration_ops as registration_ops
+    from ._registration import unregistration_ops as unregistration_ops
+    from ._replica import Replica as Replica
+    from ._replica import ReplicaStats as ReplicaStats
+    from ._transport import InMemoryTransport as InMemoryTransport
+    from ._transport import WmTransport as WmTransport
+    from ._zenoh_transport import ZenohTransport as ZenohTransport
+    from .scene._names import display_name as display_name
+
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "transact_in_batches": "._batches",
+        "WmClient": "._client",
+        "describe_change": "._describe",
+        "DeviceSpec": "._registration",
+        "RobotRegistration": "._registration",
+        "SkillSpec": "._registration",
+        "registration_ops": "._registration",
+        "unregistration_ops": "._registration",
+        "Replica": "._replica",
+        "ReplicaStats": "._replica",
+        "InMemoryTransport": "._transport",
+        "WmTransport": "._transport",
+        "ZenohTransport": "._zenoh_transport",
+        "display_name": ".scene._names",
+    },
+)
+
 
 __all__ = [
     "CardinalityError",

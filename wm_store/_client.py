@@ -22,6 +22,7 @@ from __future__ import annotations
 import uuid
 from collections.abc import AsyncIterator, Callable, Iterable, Mapping, Sequence
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
+from typing import TYPE_CHECKING
 
 import anyio
 
@@ -29,7 +30,6 @@ from wm_store._errors import ConflictError, ElementNotFoundError, TransportError
 from wm_store._registration import RobotRegistration, registration_ops, unregistration_ops
 from wm_store._replica import Replica
 from wm_store._transport import WmTransport, raise_for_error
-from wm_store.ontology import Ontology, property_turtle, relation_turtle
 from wm_store.protocol import (
     AddElement,
     CardinalityReply,
@@ -64,8 +64,11 @@ from wm_store.protocol import (
     UpdateElement,
     Value,
 )
-from wm_store.reasoners import SpatialReasoner, classify, identify
 from wm_store.scene import match_relations, resolve
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
+    from wm_store.reasoners import SpatialReasoner
 
 __all__ = ["WmClient"]
 
@@ -193,16 +196,21 @@ class WmClient:
     ) -> list[tuple[str, float]]:
         """Default individuals (templates) of ``candidates_type`` that ``element`` resembles,
         with similarity scores >= ``threshold``, best first (SkiROS ``classify``)."""
-        state = self.replica.state
-        return classify(state, self.ontology, element, candidates_type, threshold)
+        from wm_store.reasoners import classify  # the reasoners load when first used
+
+        return classify(self.replica.state, self.ontology, element, candidates_type, threshold)
 
     def identify(self, observed: Element, threshold: float = 0.5) -> list[tuple[str, float]]:
         """Existing elements that ``observed`` may be, best first (SkiROS ``identify``)."""
+        from wm_store.reasoners import identify
+
         return identify(self.replica.state, self.ontology, observed, threshold)
 
     @property
     def spatial(self) -> SpatialReasoner:
         """Poses in the world frame, relative poses, inside/on tests over the replica."""
+        from wm_store.reasoners import SpatialReasoner
+
         return SpatialReasoner(self.replica.state, self.ontology)
 
     # ------------------------------------------------------------------ remote reads
@@ -369,6 +377,8 @@ class WmClient:
         comment: str = "",
     ) -> int:
         """Teach a new relation between classes (SkiROS learns concepts during operation)."""
+        from wm_store.ontology import relation_turtle  # rdflib, only when teaching
+
         text = relation_turtle(
             name, domain=domain, range=range, parent=parent, label=label, comment=comment
         )
@@ -386,6 +396,8 @@ class WmClient:
         comment: str = "",
     ) -> int:
         """Teach a new data property of value ``kind`` (float, int, bool, string, Pose...)."""
+        from wm_store.ontology import property_turtle  # rdflib, only when teaching
+
         text = property_turtle(
             name,
             kind=kind,

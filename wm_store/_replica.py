@@ -17,15 +17,16 @@ import logging
 import math
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from typing import TYPE_CHECKING
 
 import anyio
 import msgspec
 from anyio.abc import TaskStatus
 from anyio.streams.memory import MemoryObjectSendStream
 
+from wm_store import ontology as onto  # a lazy face: rdflib loads with the first ontology
 from wm_store._errors import HistoryCompactedError, RevisionTimeoutError, WmError
 from wm_store._transport import WmTransport, raise_for_error
-from wm_store.ontology import Ontology, replay
 from wm_store.protocol import (
     Change,
     ChangesReply,
@@ -41,6 +42,9 @@ from wm_store.protocol import (
     TermsDefined,
 )
 from wm_store.scene import SceneState
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["Replica", "ReplicaStats"]
 
@@ -74,7 +78,7 @@ class Replica:
         """Seconds between two checks of this replica against the store (revision and digest;
         0: never)."""
         self._own_base = base_ontology is not None
-        self.base_ontology = base_ontology or Ontology.default()
+        self.base_ontology = base_ontology or onto.Ontology.default()
         """The core the store's ontology log is replayed on: the store's own core (this
         process's core file when the digests agree, else fetched), or the one given."""
         self.ontology = self.base_ontology
@@ -194,7 +198,7 @@ class Replica:
             await self._fetch_core()
         state = SceneState.from_snapshot(reply, self._spatial)
         self.ontology = await anyio.to_thread.run_sync(
-            replay, self.base_ontology, state.ontology_log
+            onto.replay, self.base_ontology, state.ontology_log
         )
         self.state = state
         self._recent = {state.revision: state.digest}
@@ -209,7 +213,7 @@ class Replica:
         reply = raise_for_error(await self.transport.request(GetOntology(), timeout=self.timeout))
         assert isinstance(reply, OntologyReply)
         _log.info("the store's core ontology differs from this process's file; using the store's")
-        self.base_ontology = await anyio.to_thread.run_sync(Ontology.load, reply.core)
+        self.base_ontology = await anyio.to_thread.run_sync(onto.Ontology.load, reply.core)
 
     def _follow_spatial(self) -> None:
         spatial = frozenset(n for n, r in self.ontology.relations.items() if r.spatial)
@@ -221,7 +225,7 @@ class Replica:
         for delta in change.deltas:
             self.state.apply(delta)
             if isinstance(delta, ClassDefined | TemplateDefined | TermsDefined):
-                self.ontology = replay(self.ontology, [delta])
+                self.ontology = onto.replay(self.ontology, [delta])
                 self._follow_spatial()
         self.state.revision = change.revision
         self.state.digest = change.digest

@@ -18,7 +18,7 @@ import logging
 import math
 from collections.abc import AsyncIterator
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import anyio
 
@@ -26,7 +26,9 @@ from meshlink.rpc import encode
 from meshlink.rpc import raise_for_error as raise_remote_error
 from wm_store._errors import WM_CODES, remote_error
 from wm_store.protocol import Change, Reply, Request, decode_change, decode_reply
-from wm_store.server import WmService
+
+if TYPE_CHECKING:
+    from wm_store.server import WmService
 
 __all__ = ["InMemoryTransport", "WmTransport", "raise_for_error"]
 

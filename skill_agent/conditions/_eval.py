@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skill_agent._errors import SkillLoadError
 from skill_agent._skill import WorldView
@@ -39,8 +39,11 @@ from skill_agent.protocol._skills import (
     RelationCond,
 )
 from wm_store import OntologyError
-from wm_store.ontology import Ontology, with_article
+from wm_store.ontology import with_article
 from wm_store.protocol import Element, Pose, Position, Value
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["evaluate", "evaluate_all"]
 

@@ -11,7 +11,7 @@ the values in atoms). Pure and synchronous.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import ClassVar, Protocol, TypeAlias
+from typing import TYPE_CHECKING, ClassVar, Protocol, TypeAlias
 
 import msgspec
 
@@ -30,8 +30,11 @@ from skill_agent.protocol._skills import (
     PropertyCond,
     RelationCond,
 )
-from wm_store.ontology import Ontology, did_you_mean, with_article
+from wm_store.ontology import did_you_mean, with_article
 from wm_store.protocol import Value
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = [
     "OP_TEXT",

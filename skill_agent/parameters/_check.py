@@ -8,6 +8,7 @@ properties the ontology knows (custom conditions by their registered class).
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING
 
 from skill_agent._errors import (
     ParameterTypeError,
@@ -31,8 +32,11 @@ from skill_agent.protocol._skills import (
     SkillDescription,
 )
 from wm_store import WmError
-from wm_store.ontology import Ontology, kind_of, with_article
+from wm_store.ontology import kind_of, with_article
 from wm_store.protocol import Pose, Position
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["check_description"]
 

@@ -38,6 +38,7 @@ parameter's state in ``param_states`` and names the ones still ``initialized`` i
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable, Mapping
 from types import MappingProxyType
 from typing import Final
@@ -130,10 +131,11 @@ def _check_element(
     element = view.find_element(value)
     if element is None:
         known = [e.id for e in view.resolve_element(type=spec.type)]
-        raise ParameterError(
-            f"{where}: no element {value!r} in the world model; elements of class {spec.type}: "
-            f"{', '.join(known[:10]) or 'none'}"
-        )
+        hint = did_you_mean(value, known)
+        if hint == ".":  # no close name: the class's elements, the most alike first
+            alike = sorted(known, key=lambda k: -difflib.SequenceMatcher(None, value, k).ratio())
+            hint = f"; elements of class {spec.type}: {', '.join(alike[:10]) or 'none'}"
+        raise ParameterError(f"{where}: no element {value!r} in the world model{hint}")
     ontology = view.ontology
     name = display_name(element)
     if not ontology.is_a(element.type, spec.type):

@@ -43,6 +43,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from importlib import metadata
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 import msgspec
 
@@ -55,7 +56,10 @@ from skill_agent.protocol._skills import SkillDescription
 from skill_agent.runtime._agent import SkillEntry
 from skill_agent.runtime._config import AgentConfig, ServiceSkillConfig, is_file_reference
 from wm_store import WmError
-from wm_store.ontology import Ontology, did_you_mean
+from wm_store.ontology import did_you_mean
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["ENTRY_POINT_GROUP", "SkillRegistry", "entry_point_skills"]
 

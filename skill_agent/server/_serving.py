@@ -137,7 +137,7 @@ async def serve_agent(
             await tg.start(mesh.serve, rpc_key, service.rpc.serve_on(rpc_key))
             token = mesh.declare_token(address)
             await reregister()
-            _log.warning(
+            _log.info(
                 "agent %s ready on mesh %r: %d skills (%s)%s",
                 name,
                 keys.mesh,

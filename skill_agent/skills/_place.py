@@ -239,8 +239,10 @@ class Place(Skill):
             tcp = (await arm.state()).tcp
             bottom = to_transform(tcp).compose(object_in_tcp).translation[2] - height / 2
             if bottom < rim + RIM_SLACK and math.hypot(tcp.x - goal.x, tcp.y - goal.y) < 0.01:
+                side = "below" if bottom < rim else "above"
                 await ctx.progress(
-                    f"the arm stops short; releasing {bottom - rim:+.3f} m from the rim",
+                    f"the arm stops short; releasing with the object's bottom "
+                    f"{abs(bottom - rim) * 1000:.0f} mm {side} the rim",
                     step="release",
                 )
                 return ""

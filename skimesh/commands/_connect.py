@@ -10,6 +10,8 @@ from pathlib import Path
 from meshlink import Mesh, mesh_config_from_args, open_mesh
 from wm_store import WmClient, ZenohTransport
 
+from ..errors import UsageError
+
 __all__ = ["mesh_session", "read_terms", "wm_session"]
 
 
@@ -24,7 +26,7 @@ async def wm_session(args: argparse.Namespace, *, author: str = "cli") -> AsyncI
     """A world-model client with a loaded replica, for one command. It checks against the
     store's ontology (``--ontology`` files belong to the store: refused here)."""
     if getattr(args, "ontology", None):
-        raise SystemExit(
+        raise UsageError(
             "--ontology teaches a store at its start; a client takes the store's ontology. "
             "Teach a running store with `skimesh wm teach FILE.ttl`"
         )
@@ -36,12 +38,12 @@ async def wm_session(args: argparse.Namespace, *, author: str = "cli") -> AsyncI
 
 
 def read_terms(files: list[str]) -> list[tuple[str, str]]:
-    """(file name, Turtle text) of each file of ontology terms; SystemExit naming a missing
+    """(file name, Turtle text) of each file of ontology terms; UsageError naming a missing
     one. Reads files: call it before the event loop runs."""
     out = []
     for name in files:
         path = Path(name)
         if not path.is_file():
-            raise SystemExit(f"no ontology file {name}")
+            raise UsageError(f"no ontology file {name}")
         out.append((path.name, path.read_text(encoding="utf-8")))
     return out

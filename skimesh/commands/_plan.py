@@ -4,7 +4,8 @@ A dry run for people who program robots: it reads the world model and the regist
 (like the task agent does), plans with the chosen engine, prints the partial-order schedule and,
 with ``--emit-pddl DIR``, writes ``domain.pddl`` and ``problem.pddl`` for inspection with other
 planners. ``skimesh task submit --goal ... --emit-pddl DIR`` writes the same files before it
-submits. Exit codes: 0 planned, 2 unsolvable, 4 other errors.
+submits. Exit codes: 0 planned, 1 the planner failed, 2 unsolvable (or bad input), 3 no
+answer from the world model.
 
 The text schedule names elements as everything else does (:func:`wm_store.display_name`:
 ``Camera-1``, or ``Pulley-4 (Gear-1)`` where the label and the id differ); ``--json`` keeps
@@ -30,11 +31,12 @@ from wm_store.protocol import Element
 if TYPE_CHECKING:  # the planners take over a second to import: only when planning
     from task_agent.planning import PartialOrderPlan
 
+from ..errors import Exit
 from ._connect import wm_session
 
 __all__ = ["add_arguments", "emit_pddl", "named_order", "plan_goal"]
 
-EXIT_UNSOLVABLE = 2
+EXIT_UNSOLVABLE = Exit.REFUSED
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -110,7 +112,7 @@ async def plan_goal(args: argparse.Namespace) -> int:
             return EXIT_UNSOLVABLE
         except PlanningError as e:
             print(f"planning failed: {e}", file=sys.stderr)
-            return 4
+            return Exit.FAILED
         order = to_partial_order(plan)
         shown = order if args.json else named_order(order, wm.find_element)
     if args.json:

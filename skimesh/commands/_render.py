@@ -3,6 +3,7 @@ elements are named by :func:`wm_store.display_name`."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 
 from wm_store import display_name
@@ -20,7 +21,17 @@ from wm_store.protocol import (
 )
 from wm_store.scene import SceneState, id_sort_key
 
-__all__ = ["element_line", "format_value", "render_tree"]
+__all__ = ["element_line", "format_value", "plain_help", "render_tree"]
+
+_ROLE = re.compile(r":(?:func|class|mod|meth|data|attr):`~?([^`]+)`")
+
+
+def plain_help(doc: str | None) -> str | None:
+    """A docstring as a command's help text: reST roles and double backquotes become the plain
+    `name` a terminal shows (``wm_store.display_name`` -> `wm_store.display_name`)."""
+    if doc is None:
+        return None
+    return _ROLE.sub(r"`\1`", doc).replace("``", "`")
 
 
 def format_value(value: Value) -> str:

@@ -18,7 +18,6 @@ import anyio
 import msgspec
 
 from wm_store import WmClient
-from wm_store.ontology import Ontology, replay
 from wm_store.protocol import (
     ClassDefined,
     GetOntology,
@@ -163,6 +162,8 @@ def _turtle_of(delta: ClassDefined | TemplateDefined | TermsDefined) -> str:
 
 
 def _whole_turtle(reply: OntologyReply) -> str:
+    from wm_store.ontology import Ontology, replay  # rdflib, only to print the ontology
+
     onto = replay(Ontology.load(reply.core), reply.taught)
     return onto.graph.serialize(format="turtle")
 

@@ -19,13 +19,27 @@ import anyio
 import msgspec
 
 from meshlink import add_mesh_arguments
-from wm_store import WmClient, transact_in_batches
-from wm_store.protocol import Element, PropertyFilter, Query
-from wm_store.rdf import export_turtle, import_turtle
+from wm_store import (
+    ElementNotFoundError,
+    RemoteError,
+    WmClient,
+    ZenohTransport,
+    transact_in_batches,
+)
+from wm_store.ontology import did_you_mean
+from wm_store.protocol import (
+    Element,
+    ElementsReply,
+    GetElements,
+    PropertyFilter,
+    Query,
+    Resolve,
+)
 from wm_store.scene import SceneState, id_sort_key
 
+from ..errors import UsageError
 from ..runtime import run_service
-from ._connect import wm_session
+from ._connect import mesh_session, wm_session
 from ._edit import add_edit_commands
 from ._render import element_line, render_tree
 from ._teach import add_ontology_commands
@@ -94,9 +108,7 @@ def _add_read_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]
         json_help=None,
     )
     get.add_argument("ids", nargs="+", metavar="ID", help="element id, e.g. Gear-1")
-    get.set_defaults(
-        func=lambda a: _client(a, lambda wm: _print_json([wm.get_element(i) for i in a.ids]))
-    )
+    get.set_defaults(func=_get)
 
     tree = _command(
         cmds,
@@ -214,6 +226,36 @@ def _add_write_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     scen.set_defaults(func=_import_scenario)
 
 
+def _element(wm: WmClient, element_id: str) -> Element:
+    """The element ``element_id``, or ElementNotFoundError naming the closest ids."""
+    found = wm.find_element(element_id)
+    if found is None:
+        hint = did_you_mean(element_id, wm.replica.state.elements)
+        raise ElementNotFoundError(f"no element {element_id!r} in the world model{hint}")
+    return found
+
+
+def _get(args: argparse.Namespace) -> int:
+    """``wm get``: one read from the store, no replica (no snapshot, no ontology: start-up
+    time); an unknown id names the closest ids the store has."""
+
+    async def main() -> int:
+        async with mesh_session(args) as mesh:
+            transport = ZenohTransport(mesh)
+            reply = await transport.request(GetElements(ids=args.ids), timeout=args.timeout)
+            if isinstance(reply, ElementsReply):
+                return await _print_json(reply.elements)
+            listing = await transport.request(Resolve(query=Query()), timeout=args.timeout)
+        known = [e.id for e in listing.elements] if isinstance(listing, ElementsReply) else []
+        missing = [i for i in args.ids if i not in known]
+        if not known or not missing:  # the store's own error (an ACL, a fault)
+            raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
+        said = [f"no element {i!r} in the world model{did_you_mean(i, known)}" for i in missing]
+        raise ElementNotFoundError("; ".join(said))
+
+    return run_service(main)
+
+
 def _client(args: argparse.Namespace, body: Body) -> int:
     async def main() -> int:
         async with wm_session(args) as wm:
@@ -239,7 +281,7 @@ async def _print_json(obj: object) -> int:
 async def _print_tree(args: argparse.Namespace, wm: WmClient) -> int:
     state = wm.replica.state
     if args.root:
-        wm.get_element(args.root)
+        _element(wm, args.root)
     if args.json:
         return await _write_json(_tree_json(state, [args.root] if args.root else None))
     print(render_tree(state, [args.root] if args.root else None))
@@ -275,7 +317,7 @@ def _query(args: argparse.Namespace) -> int:
     for cond in args.where:
         name, sep, raw = cond.partition("=")
         if not sep:
-            raise SystemExit(f"--where takes PROP=VALUE, not {cond!r}")
+            raise UsageError(f"--where takes PROP=VALUE, not {cond!r}")
         filters.append(PropertyFilter(property=name, op="eq", value=_parse_scalar(raw)))
     q = Query(type=args.type, label=args.label, filters=filters)
     return _client(args, lambda wm: _print_found(args, list(wm.resolve_element(q))))
@@ -333,6 +375,8 @@ def _check(args: argparse.Namespace) -> int:
 def _export(args: argparse.Namespace) -> int:
     async def body(wm: WmClient) -> int:
         state = wm.replica.state.copy()  # the replica keeps changing; rdflib runs in a thread
+        from wm_store.rdf import export_turtle  # rdflib, only to export
+
         text = await anyio.to_thread.run_sync(export_turtle, state, wm.ontology)
         if args.file:
             await anyio.Path(args.file).write_text(text)
@@ -358,6 +402,8 @@ def _import(args: argparse.Namespace) -> int:
     text = Path(args.file).read_text()
 
     async def body(wm: WmClient) -> int:
+        from wm_store.rdf import import_turtle  # rdflib, only to import
+
         state = wm.replica.state.copy()  # for the id counters; rdflib parses in a thread
         ops = await anyio.to_thread.run_sync(
             functools.partial(import_turtle, text, wm.ontology, state=state)

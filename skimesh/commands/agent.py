@@ -18,6 +18,7 @@ import logging
 import sys
 from collections.abc import Awaitable, Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import anyio
 import msgspec
@@ -26,22 +27,25 @@ from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
-from skill_agent.runtime import AgentConfig, load_config
-from skill_agent.server import run_agent
-from wm_store import WmClient, WmError, ZenohTransport
-from wm_store.ontology import TYPED_KINDS
+from wm_store import WmError
+from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
 
-from ..errors import SkimeshError
+from ..errors import Exit, SkimeshError
 from ..runtime import run_service
 from . import _runs as runs_command
 from ._connect import mesh_session
+from ._store_reads import registered_agents
+
+if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
+    from skill_agent.runtime import AgentConfig
 
 __all__ = ["add_parser", "parse_params", "scenario_config_path"]
 
 _log = logging.getLogger("skimesh.agent")
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
-EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE, EXIT_INTERRUPTED = 1, 2, 3, 130
+EXIT_FAILED, EXIT_REFUSED, EXIT_UNREACHABLE = Exit.FAILED, Exit.REFUSED, Exit.UNREACHABLE
+EXIT_INTERRUPTED = Exit.INTERRUPTED
 
 
 def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
@@ -165,6 +169,7 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
     label, or the name inside one of its agent configs: ``Scenario.agents``), or
     FileNotFoundError listing what the scenario has."""
     from scenario import ScenarioError, load_scenario
+    from skill_agent.runtime import load_config
 
     from .sim import scenario_file
 
@@ -185,6 +190,8 @@ def scenario_config_path(scenario: str, robot: str) -> Path:
 
 
 def _load(args: argparse.Namespace) -> list[AgentConfig]:
+    from skill_agent.runtime import load_config
+
     if args.agent_config:
         configs = [load_config(path) for path in args.agent_config]
     else:
@@ -213,6 +220,8 @@ def _scenario_agents(scenario: str) -> dict[str, str]:
 
 
 def _serve(args: argparse.Namespace) -> int:
+    from skill_agent.server import run_agent
+
     try:
         configs = _load(args)
     except (SkillError, FileNotFoundError) as e:
@@ -291,7 +300,7 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
             interrupted.append(True)
             raise
         except AgentTransportError as e:
-            print(f"error: {e}", file=sys.stderr)
+            print(f"error: {await _not_alive(args) or e}", file=sys.stderr)
             return EXIT_UNREACHABLE
         except TimeoutError:
             print(f"error: no result within {args.deadline:g} s (run stopped)", file=sys.stderr)
@@ -310,6 +319,26 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
     return code
 
 
+async def _not_alive(args: argparse.Namespace) -> str:
+    """For an agent that did not answer: "no agent X is alive", naming the closest live agents
+    (from the liveliness tokens, at once), or "" when X is alive or the mesh cannot tell."""
+    name = getattr(args, "agent", None)
+    if not name:
+        return ""
+    try:
+        async with mesh_session(args) as mesh:
+            alive = await list_agents(mesh, timeout=min(args.timeout, 2.0))
+    except MeshlinkError:
+        return ""
+    if name in alive:
+        return ""
+    where = f"mesh {args.mesh!r}"
+    if not alive:
+        return f"no agent is alive on {where} (is `skimesh agent` running there?)"
+    hint = did_you_mean(name, alive).rstrip(".")
+    return f"no agent {name!r} is alive on {where}{hint} (alive: {', '.join(alive)})"
+
+
 def _print_json(obj: object) -> None:
     sys.stdout.write(msgspec.json.encode(obj).decode() + "\n")
     sys.stdout.flush()
@@ -326,16 +355,8 @@ async def _agents(args: argparse.Namespace) -> int:
         alive = set(await list_agents(mesh, timeout=args.timeout))
         registered: dict[str, dict[str, object]] = {}
         reached = True
-        try:
-            async with WmClient.connect(ZenohTransport(mesh), timeout=args.timeout) as wm:
-                for agent in wm.resolve_element(type="Agent"):
-                    robots = [r.object for r in wm.query_relation(agent.id, "controls")]
-                    registered[agent.label] = {
-                        "element": agent.id,
-                        "available": bool(agent.properties.get("available", False)),
-                        "robot": robots[0] if robots else "",
-                        "skills": len(wm.query_relation(agent.id, "hasSkill")),
-                    }
+        try:  # three reads from the store: no replica, no ontology to load (start-up time)
+            registered = await registered_agents(mesh, timeout=args.timeout)
         except WmError as e:
             reached = False
             print(f"warning: world model unreachable ({e}); liveliness only", file=sys.stderr)
@@ -383,6 +404,9 @@ async def _skills(args: argparse.Namespace) -> int:
             }
         else:
             replies = await find_skills(mesh, timeout=args.timeout)
+    if not replies:
+        print(f"skimesh skills: no agent answered on mesh {args.mesh!r}", file=sys.stderr)
+        return EXIT_UNREACHABLE
     if args.json:
         _print_json({agent: reply.skills for agent, reply in replies.items()})
         return 0

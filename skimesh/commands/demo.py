@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING, Any
 import anyio
 import msgspec
 
+from ..errors import Exit
+
 if TYPE_CHECKING:
     from mujoco_sim.recording import Recorder
     from scenario import Scenario
@@ -45,7 +47,7 @@ if TYPE_CHECKING:
 
 __all__ = ["add_parser", "mission_goal"]
 
-EXIT_SETUP, EXIT_INTERRUPTED = 2, 130
+EXIT_SETUP, EXIT_INTERRUPTED = Exit.REFUSED, Exit.INTERRUPTED
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -190,7 +192,7 @@ async def _main(args: argparse.Namespace, setup: DemoSetup, recorder: Recorder) 
     from ..demo import run_demo
 
     stop = anyio.Event()
-    code = EXIT_SETUP
+    code: int = EXIT_SETUP
     async with anyio.create_task_group() as tg:
         tg.start_soon(_signals, stop, tg.cancel_scope)
         try:

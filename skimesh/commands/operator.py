@@ -11,8 +11,8 @@ requests and answers them:
   answer one; ``--seen`` tells where you see an element (e.g. the meal box no camera found),
   written to the world model as your observation.
 
-Exit codes: 0 done, 1 ``--wait`` saw no request in time, 4 errors (no operator agent, an
-unknown request id). Ctrl-C / SIGTERM ends it cleanly.
+Exit codes: 0 done, 1 ``--wait`` saw no request in time, 2 a bad answer or an unknown request
+id, 3 no operator agent answered. Ctrl-C / SIGTERM ends it cleanly.
 """
 
 from __future__ import annotations
@@ -32,13 +32,15 @@ from meshlink import Mesh, MeshlinkError, Sample, Subscription, add_mesh_argumen
 from task_agent import OperatorClient, TaskError
 from task_agent.protocol import PendingStep, SeenAt
 
+from ..errors import Exit, exit_code
 from ..runtime import run_service
 from ._connect import mesh_session
+from ._render import plain_help
 
 __all__ = ["add_parser"]
 
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
-EXIT_NONE, EXIT_ERROR = 1, 4
+EXIT_NONE = Exit.FAILED
 VERDICTS = {"s": True, "success": True, "done": True, "f": False, "failure": False}
 
 
@@ -46,7 +48,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "operator",
         help="list the steps waiting for a person and answer them (semi-autonomy)",
-        description=__doc__.split("\n\n", 1)[1] if __doc__ else None,
+        description=plain_help(__doc__.split("\n\n", 1)[1] if __doc__ else None),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_mesh_arguments(p)
@@ -113,7 +115,7 @@ def _main(args: argparse.Namespace) -> int:
                     return await _answer(client, *args.answer, message=args.message, seen=args.seen)
                 if args.seen:
                     print("error: --seen goes with --answer", file=sys.stderr)
-                    return EXIT_ERROR
+                    return Exit.REFUSED
                 interactive = args.interactive or (
                     sys.stdin.isatty() and not args.json and args.wait is None
                 )
@@ -123,7 +125,7 @@ def _main(args: argparse.Namespace) -> int:
                     return await _list(args, client, wakeups)
         except (TaskError, MeshlinkError) as e:
             print(f"error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return exit_code(e)
 
     return run_service(main)
 
@@ -179,7 +181,7 @@ async def _answer(
 ) -> int:
     if verdict.lower() not in VERDICTS:
         print(f"error: the verdict is 'success' or 'failure', not {verdict!r}", file=sys.stderr)
-        return EXIT_ERROR
+        return Exit.REFUSED
     success = VERDICTS[verdict.lower()]
     print(await client.answer(request_id, success, message, author="cli", seen=seen))
     return 0

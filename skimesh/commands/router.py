@@ -16,8 +16,9 @@ from pathlib import Path
 
 import anyio
 
-from meshlink import DEFAULT_ROUTER_ENDPOINT, add_mesh_arguments, run_router
+from meshlink import DEFAULT_ROUTER_ENDPOINT, SessionError, add_mesh_arguments, run_router
 
+from ..errors import Exit, UsageError
 from ..runtime import run_service
 
 __all__ = ["add_parser"]
@@ -43,18 +44,21 @@ def _run(args: argparse.Namespace) -> int:
     config_file: str | None = args.zenoh_config
     if config_file and not Path(config_file).is_file():
         print(f"skimesh router: no config file {config_file}", file=sys.stderr)
-        return 2
+        return Exit.REFUSED
 
     async def main() -> int:
         run = functools.partial(run_router, listen, connect=connect, config_file=config_file)
         async with anyio.create_task_group() as tg:  # errors: printed by skimesh.cli.main
-            await tg.start(run)
+            try:
+                await tg.start(run)
+            except SessionError as e:  # a busy or bad listen endpoint: exit 2, not "unreachable"
+                raise UsageError(str(e)) from None
             where = ", ".join(listen) or (
                 f"the endpoints of {config_file}" if config_file else DEFAULT_ROUTER_ENDPOINT
             )
             # Zenoh keeps retrying a router's connect endpoints: the others may start later
             linked = f", connecting to {', '.join(connect)}" if connect else ""
-            logging.getLogger("skimesh").warning("router listening on %s%s", where, linked)
+            logging.getLogger("skimesh.router").info("router listening on %s%s", where, linked)
         return 0
 
     return run_service(main)

@@ -84,6 +84,7 @@ def _run(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         failure: BaseException | None = None
+        world: SimWorld | None = None
         try:
             async with open_mesh(mesh_config_from_args(args)) as mesh:
                 world = await SimWorld.create(scenario, options, recorder)
@@ -99,7 +100,7 @@ def _run(args: argparse.Namespace) -> int:
                     await tg.start(serve, mesh, devices)
                     await tg.start(serve_truth, mesh, SimTruth(world))
                     names = ", ".join(f"{o}/{d}" for o, d in devices)
-                    _log.warning(
+                    _log.info(
                         "sim: scenario %s (%s), serving %s on mesh %s",
                         scenario.name,
                         "fast" if args.fast else "real time",
@@ -113,13 +114,14 @@ def _run(args: argparse.Namespace) -> int:
                         await world.wait_time(args.duration)
                         failure = world.failure
                     tg.cancel_scope.cancel()
+        finally:  # also on Ctrl-C / SIGTERM: say where the simulation stopped
+            if world is not None:
                 stats = world.statistics()
                 print(
                     f"[sim] stopped at t={stats.sim_time:.2f} s, real-time factor "
                     f"{stats.real_time_factor:.2f}, {stats.slips} slip(s)",
                     flush=True,
                 )
-        finally:
             if recorder is not None:
                 await anyio.to_thread.run_sync(recorder.close)
         if failure is not None:

@@ -32,7 +32,6 @@ import argparse
 import sys
 from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
-from typing import NoReturn
 
 import anyio
 import msgspec
@@ -47,25 +46,25 @@ from task_agent.protocol import (
 )
 from wm_store import WmClient, WmError, ZenohTransport
 
+from ..errors import Exit, exit_code
 from ..runtime import run_service
 from . import _plan as plan_command
 from . import operator as operator_command
 from ._connect import mesh_session, wm_session
+from ._render import plain_help
 from ._task_output import ProgressPrinter, info_lines, print_json, print_problems
 
 __all__ = ["EXIT_CODES", "add_parser"]
 
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
-EXIT_CODES = {"succeeded": 0, "failed": 1, "unsolvable": 2, "aborted": 3}
-EXIT_ERROR, EXIT_CONTRADICTED, EXIT_INTERRUPTED = 4, 5, 130
-
-
-class _Parser(argparse.ArgumentParser):
-    """Usage errors exit with 4 (2 means "unsolvable" for ``task submit``)."""
-
-    def error(self, message: str) -> NoReturn:
-        self.print_usage(sys.stderr)
-        self.exit(EXIT_ERROR, f"{self.prog}: error: {message}\n")
+#: A finished task's exit code by its outcome (the table: :class:`skimesh.errors.Exit`).
+EXIT_CODES = {
+    "succeeded": Exit.OK,
+    "failed": Exit.FAILED,
+    "unsolvable": Exit.REFUSED,
+    "aborted": Exit.ABORTED,
+}
+EXIT_CONTRADICTED, EXIT_INTERRUPTED = Exit.CONTRADICTED, Exit.INTERRUPTED
 
 
 def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
@@ -100,7 +99,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     agent.set_defaults(func=_serve)
 
     task = sub.add_parser("task", help="submit, follow, list and abort tasks")
-    cmds = task.add_subparsers(dest="task_command", metavar="COMMAND", parser_class=_Parser)
+    cmds = task.add_subparsers(dest="task_command", metavar="COMMAND")
     task.set_defaults(func=lambda _a: _usage(task))
 
     submit = cmds.add_parser(
@@ -108,8 +107,9 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="submit a goal or a task file and follow it to its end",
         description="A succeeded goal is checked fact by fact in the world model and, when a "
         "simulator runs on the mesh, in the physics. Exit codes: 0 succeeded, 1 failed, "
-        "2 unsolvable, 3 aborted, 4 usage or other errors, 5 succeeded in the world model but "
-        "contradicted by the physics, 130 interrupted (the task is aborted first).",
+        "2 unsolvable (or a usage error, an unknown element), 3 no task agent answered, "
+        "4 aborted, 5 succeeded in the world model but contradicted by the physics, "
+        "130 interrupted (the task is aborted first).",
     )
     what = submit.add_mutually_exclusive_group(required=True)
     what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
@@ -188,7 +188,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="stop every run of a task (robots to a safe state)",
         description="Stop every run of a task; each robot is brought to a safe state. Returns "
         "once the task ended. Exit codes: 0 the task has ended (aborted now, or it had ended "
-        "already), 4 errors (no such task, no task agent, still running after the wait).",
+        "already), 1 still running after the wait, 2 no such task, 3 no task agent answered.",
     )
     abort.add_argument("task_id", metavar="TASK_ID", help="the task to stop")
     abort.add_argument(
@@ -242,7 +242,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     plan = cmds.add_parser(
         "plan",
         help="plan a goal without running it (prints the schedule; --emit-pddl DIR)",
-        description=plan_command.__doc__,
+        description=plain_help(plan_command.__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     plan_command.add_arguments(plan)
@@ -258,7 +258,7 @@ def _follow_arguments(p: argparse.ArgumentParser) -> None:
         type=float,
         default=3600.0,
         metavar="S",
-        help="stop following after S seconds (exit 4; the task goes on; default: 3600)",
+        help="stop following after S seconds (exit 3; the task goes on; default: 3600)",
     )
     p.add_argument(
         "--no-progress",
@@ -283,7 +283,7 @@ def _client_arguments(p: argparse.ArgumentParser) -> None:
 
 def _usage(parser: argparse.ArgumentParser) -> int:
     parser.print_help(sys.stderr)
-    return EXIT_ERROR
+    return Exit.REFUSED
 
 
 # --------------------------------------------------------------------------- task-agent
@@ -304,7 +304,7 @@ def _serve(args: argparse.Namespace) -> int:
                 await serve_tasks(mesh, wm, operator=operator)  # until cancelled
         except (WmError, MeshlinkError) as e:
             print(f"skimesh task-agent: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return exit_code(e)
         return 0
 
     return run_service(main)
@@ -328,13 +328,13 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
         except VerificationError as e:
             print(f"refused: {e}", file=sys.stderr)
             print_problems(getattr(e, "problems", []))
-            return EXIT_ERROR
+            return Exit.REFUSED
         except (TaskError, MeshlinkError, OSError) as e:
             print(f"error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return exit_code(e)
         except TimeoutError:
             print("error: the task did not finish within --deadline", file=sys.stderr)
-            return EXIT_ERROR
+            return Exit.UNREACHABLE
 
     code = run_service(main)
     if interrupted:
@@ -391,8 +391,8 @@ async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) ->
         if isinstance(event, TaskFinished):
             if event.check is not None and event.check.contradicted:
                 return EXIT_CONTRADICTED
-            return EXIT_CODES.get(event.outcome, EXIT_ERROR)
-    return EXIT_ERROR  # pragma: no cover - the stream ends with TaskFinished
+            return EXIT_CODES.get(event.outcome, Exit.FAILED)
+    return Exit.UNREACHABLE  # pragma: no cover - the stream ends with TaskFinished
 
 
 async def _follow_live(events: AsyncIterator[TaskEvent]) -> int:
@@ -403,12 +403,12 @@ async def _follow_live(events: AsyncIterator[TaskEvent]) -> int:
 
     printer = ProgressPrinter()  # keeps the per-robot times for the summary
     finished = await follow_live(events, Console(), on_event=printer.lines)
-    if finished is None:
-        return EXIT_ERROR
+    if finished is None:  # the stream ended without the task's end
+        return Exit.UNREACHABLE
     print("\n".join(printer.lines(finished)))
     if finished.check is not None and finished.check.contradicted:
         return EXIT_CONTRADICTED
-    return EXIT_CODES.get(finished.outcome, EXIT_ERROR)
+    return EXIT_CODES.get(finished.outcome, Exit.FAILED)
 
 
 async def _watch(args: argparse.Namespace) -> int:
@@ -453,7 +453,7 @@ async def _abort(args: argparse.Namespace) -> int:
         print(reply)
     if info.outcome == "running":
         print(f"error: task {args.task_id} is still running after the abort", file=sys.stderr)
-        return EXIT_ERROR
+        return Exit.FAILED
     return 0
 
 

@@ -16,17 +16,16 @@ from typing import TYPE_CHECKING
 import anyio
 
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
-from wm_store.ontology import Ontology
 from wm_store.protocol import Transact
-from wm_store.rdf import import_turtle
-from wm_store.server import StoreConfig, WmStore, serve_store
 
+from ..errors import UsageError
 from ..runtime import run_service
 from ._connect import read_terms
 from ._wm_client import add_client_commands
 
 if TYPE_CHECKING:
     from scenario import Scenario
+    from wm_store.server import WmStore
 
 __all__ = ["add_parser"]
 
@@ -85,7 +84,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def _serve(args: argparse.Namespace) -> int:
     if args.wm_command:  # a sub-command without its own func cannot happen; keep argparse honest
-        raise SystemExit(f"unknown wm command {args.wm_command}")
+        raise UsageError(f"unknown wm command {args.wm_command}")
+    from wm_store.ontology import Ontology  # the store's modules load only to serve
+    from wm_store.rdf import import_turtle
+    from wm_store.server import StoreConfig, WmStore, serve_store
+
     config = StoreConfig(
         data_dir=args.data, durability=args.durability, sparql_timeout=args.sparql_timeout
     )
@@ -96,8 +99,9 @@ def _serve(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         store = await WmStore.open(Ontology.default(), config)
-        if store.recovery_detail:
-            _log.warning("recovery: %s", store.recovery_detail)
+        if detail := store.recovery_detail:  # a clean log is news only with -v
+            clean = detail.startswith("clean:") and ";" not in detail
+            _log.log(logging.INFO if clean else logging.WARNING, "recovery: %s", detail)
         async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
             await tg.start(serve_store, mesh, store)
             for name, text in terms:
@@ -110,7 +114,7 @@ def _serve(args: argparse.Namespace) -> int:
                 await store.transact(Transact(ops=ops, author="scene-import"))
             if scenario is not None:
                 await _load_scenario(store, scenario)
-            _log.warning(
+            _log.info(
                 "world model ready: revision %d, %d elements on mesh %r",
                 store.revision,
                 len(store.state.elements),
@@ -137,7 +141,7 @@ async def _load_scenario(store: WmStore, scenario: Scenario) -> None:
         if ops:  # its ontology terms, in case the files gained some since
             await store.transact(Transact(ops=ops, author="scenario-import"))
         shown = ", ".join(there[:3])
-        _log.warning("scenario %r: its scene is in the store already (%s)", scenario.name, shown)
+        _log.info("scenario %r: its scene is in the store already (%s)", scenario.name, shown)
         return
     reply = await store.transact(Transact(ops=ops, author="scenario-import"))
-    _log.warning("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)
+    _log.info("scenario %r: scene loaded at revision %d", scenario.name, reply.revision)

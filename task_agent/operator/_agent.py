@@ -281,7 +281,7 @@ async def serve_operator(
             token = mesh.declare_token(keys.agent(name))
             await _register(wm, name, keys.agent(name))
             tg.start_soon(mirror.follow, wm, core)
-            _log.warning("operator agent %s ready on mesh %r", name, keys.mesh)
+            _log.info("operator agent %s ready on mesh %r", name, keys.mesh)
             task_status.started()
     finally:
         unsubscribe()

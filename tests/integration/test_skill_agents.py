@@ -548,7 +548,7 @@ def test_cli_run_skills_and_agents(site: Site) -> None:
     bad = skimesh(site, "run", "picker", "probe", "seconds=soon")
     assert bad.returncode == 2 and "no valid float" in bad.stderr
     lost = skimesh(site, "run", "nobody", "noop", "--timeout", "0.5")
-    assert lost.returncode == 3 and "did not answer" in lost.stderr
+    assert lost.returncode == 3 and "no agent 'nobody' is alive" in lost.stderr, lost.stderr
     listing = skimesh(site, "skills", "mover", "--json")
     assert sorted(d["name"] for d in json.loads(listing.stdout)["mover"]) == [
         "noop",

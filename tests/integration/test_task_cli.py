@@ -1,4 +1,4 @@
-"""``skimesh task status|list|abort|watch`` and the exit codes 1 (failed) and 3 (aborted),
+"""``skimesh task status|list|abort|watch`` and the exit codes 1 (failed) and 4 (aborted),
 each command a subprocess, over real Zenoh on loopback.
 
 The set-up is :mod:`tests.integration.test_tasks`'s (:func:`running_site`: a world-model
@@ -84,7 +84,7 @@ def test_detach_then_watch_status_list_and_abort(cli_site: Site) -> None:
 
         last = watcher.expect(lambda event: event["event"] == "TaskFinished", timeout=60)
         assert (last["outcome"], last["message"]) == ("aborted", "cli test")
-        assert watcher.proc.wait(timeout=30) == 3, watcher.log()
+        assert watcher.proc.wait(timeout=30) == 4, watcher.log()  # Exit.ABORTED
     finally:
         watcher.stop()
     after = json_out(s.skimesh("task", "list", "--json"))

@@ -18,22 +18,17 @@ Inside: ``_ontology`` (loading and extension), the layers the checks are built f
 (``_taxonomy``, ``_cardinality``, ``_values``), the graph compiler (``_model`` with ``_reader``
 and ``_properties``), the shared vocabulary (``_terms``, ``_literals``) and ``_vocab``.
 How to extend the ontology: docs/guides/extend-the-ontology.md.
+
+The name constants and the vocabulary (``_vocab``, ``_terms``) import without rdflib; the rest
+loads on first use (PEP 562 ``__getattr__``): rdflib is imported with the first ontology.
 """
 
-from ._literals import kind_of as kind_of
-from ._literals import literal_from_value as literal_from_value
-from ._literals import value_from_literal as value_from_literal
-from ._ontology import CORE_FILE as CORE_FILE
-from ._ontology import NAMESPACE as NAMESPACE
-from ._ontology import ONTOLOGY_IRI as ONTOLOGY_IRI
-from ._ontology import Ontology as Ontology
-from ._ontology import core_ontology_path as core_ontology_path
-from ._teaching import MAX_TERMS_BYTES as MAX_TERMS_BYTES
-from ._teaching import parse_terms as parse_terms
-from ._teaching import property_turtle as property_turtle
-from ._teaching import relation_turtle as relation_turtle
-from ._teaching import replay as replay
-from ._teaching import text_digest as text_digest
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from wm_store._lazy import lazy_getattr
+
 from ._terms import ALL_KINDS as ALL_KINDS
 from ._terms import TYPED_KINDS as TYPED_KINDS
 from ._terms import CardinalityRestriction as CardinalityRestriction
@@ -42,11 +37,47 @@ from ._terms import ClassInfo as ClassInfo
 from ._terms import DataPropertyInfo as DataPropertyInfo
 from ._terms import RelationInfo as RelationInfo
 from ._terms import did_you_mean as did_you_mean
+from ._terms import kind_of as kind_of
 from ._terms import with_article as with_article
 from ._vocab import Cls as Cls
 from ._vocab import Prop as Prop
 from ._vocab import Rel as Rel
 from ._vocab import Tpl as Tpl
+
+if TYPE_CHECKING:
+    from ._literals import literal_from_value as literal_from_value
+    from ._literals import value_from_literal as value_from_literal
+    from ._ontology import CORE_FILE as CORE_FILE
+    from ._ontology import NAMESPACE as NAMESPACE
+    from ._ontology import ONTOLOGY_IRI as ONTOLOGY_IRI
+    from ._ontology import Ontology as Ontology
+    from ._ontology import core_ontology_path as core_ontology_path
+    from ._teaching import MAX_TERMS_BYTES as MAX_TERMS_BYTES
+    from ._teaching import parse_terms as parse_terms
+    from ._teaching import property_turtle as property_turtle
+    from ._teaching import relation_turtle as relation_turtle
+    from ._teaching import replay as replay
+    from ._teaching import text_digest as text_digest
+
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "literal_from_value": "._literals",
+        "value_from_literal": "._literals",
+        "CORE_FILE": "._ontology",
+        "NAMESPACE": "._ontology",
+        "ONTOLOGY_IRI": "._ontology",
+        "Ontology": "._ontology",
+        "core_ontology_path": "._ontology",
+        "MAX_TERMS_BYTES": "._teaching",
+        "parse_terms": "._teaching",
+        "property_turtle": "._teaching",
+        "relation_turtle": "._teaching",
+        "replay": "._teaching",
+        "text_digest": "._teaching",
+    },
+)
+
 
 __all__ = [
     "ALL_KINDS",

@@ -16,7 +16,7 @@ numbers are written with ``repr``) for every value ``Ontology.check_value`` acce
 decoding also applies the protocol's own constraints (sizes >= 0, colour channels in [0, 1]).
 
 :data:`DATATYPE_KINDS` says which value kinds each datatype of an ``rdfs:range`` stands for;
-:func:`kind_of` names the kind of a value and :func:`typed_problem` what is wrong inside one.
+:func:`typed_problem` names what is wrong inside a value.
 """
 
 from __future__ import annotations
@@ -25,12 +25,12 @@ import math
 from typing import Final
 
 import msgspec
-from rdflib import RDF, RDFS, XSD, URIRef
+from rdflib import RDF, RDFS, XSD, Namespace, URIRef
 from rdflib import Literal as RdfLiteral
 from rdflib.term import Node
 
 from wm_store._errors import PropertyValueError
-from wm_store.ontology._terms import ALL_KINDS, SKM, TYPED_KINDS, local_name
+from wm_store.ontology._terms import ALL_KINDS, TYPED_KINDS, kind_of, local_name
 from wm_store.protocol import (
     Color,
     Frame,
@@ -46,11 +46,14 @@ from wm_store.protocol import (
 
 __all__ = [
     "DATATYPE_KINDS",
-    "kind_of",
+    "SKM",
     "literal_from_value",
     "typed_problem",
     "value_from_literal",
 ]
+
+SKM: Final = Namespace("https://skimesh.dev/ontology#")
+"""The skimesh namespace; ontology IRI ``https://skimesh.dev/ontology``."""
 
 # --------------------------------------------------------------------------- literal codec
 
@@ -211,21 +214,6 @@ def value_from_literal(lit: Node) -> Value:
 
 
 # --------------------------------------------------------------------------- value checks
-
-_KIND_OF_TYPE: Final[dict[type, str]] = {t: k for k, t in TYPED_KINDS.items()}
-
-
-def kind_of(value: object) -> str | None:
-    """The value kind of a scalar (``bool`` is not an ``int`` here), or None."""
-    if isinstance(value, bool):
-        return "bool"
-    if isinstance(value, int):
-        return "int"
-    if isinstance(value, float):
-        return "float"
-    if isinstance(value, str):
-        return "string"
-    return _KIND_OF_TYPE.get(type(value))
 
 
 def _is(obj: object, cls: type) -> bool:

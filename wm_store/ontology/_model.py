@@ -20,12 +20,12 @@ from rdflib import OWL, RDF, RDFS, BNode, Graph, URIRef
 
 from wm_store._errors import OntologyError, PropertyValueError
 from wm_store.ontology._literals import (
+    SKM,
     value_from_literal,
 )
 from wm_store.ontology._properties import read_data_property, read_relations
 from wm_store.ontology._reader import GraphReader, read_number
 from wm_store.ontology._terms import (
-    SKM,
     TEMPLATE_NAME_RE,
     CardinalityRestriction,
     ClassInfo,

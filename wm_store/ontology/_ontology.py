@@ -35,12 +35,11 @@ from rdflib import Literal as RdfLiteral
 from rdflib.util import guess_format
 
 from wm_store._errors import OntologyError, ValidationError
-from wm_store.ontology._literals import literal_from_value
+from wm_store.ontology._literals import SKM, literal_from_value
 from wm_store.ontology._model import compile_graph
 from wm_store.ontology._teaching import parse_terms, text_digest, without_known_blank_nodes
 from wm_store.ontology._terms import (
     CLASS_NAME_RE,
-    SKM,
     TEMPLATE_NAME_RE,
     TYPED_KINDS,
     ClassInfo,

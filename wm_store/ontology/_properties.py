@@ -17,14 +17,13 @@ from rdflib.collection import Collection
 from rdflib.term import Node
 
 from wm_store._errors import OntologyError
-from wm_store.ontology._literals import DATATYPE_KINDS
+from wm_store.ontology._literals import DATATYPE_KINDS, SKM
 from wm_store.ontology._reader import GraphReader, read_number
 from wm_store.ontology._terms import (
     ALL_KINDS,
     FUSABLE_KINDS,
     KIND_ALIASES,
     RESOLUTIONS,
-    SKM,
     DataPropertyInfo,
     RelationInfo,
     local_name,

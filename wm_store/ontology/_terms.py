@@ -1,4 +1,4 @@
-"""The vocabulary the ontology modules share: the skimesh namespace, the value kinds a data
+"""The vocabulary the ontology modules share (without rdflib): the value kinds a data
 property can take, the rules for names, the helpers that word error messages, and the frozen
 info structs an ontology is declared as.
 
@@ -17,10 +17,9 @@ import difflib
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Final, Literal, TypeAlias
+from typing import TYPE_CHECKING, Final, Literal, TypeAlias
 
 import msgspec
-from rdflib import Namespace, URIRef
 
 from wm_store.protocol import (
     Color,
@@ -35,9 +34,11 @@ from wm_store.protocol import (
     TypedValue,
 )
 
+if TYPE_CHECKING:
+    from rdflib import URIRef
+
 __all__ = [
     "ALL_KINDS",
-    "SKM",
     "CardinalityRestriction",
     "CardinalityShortfall",
     "ClassInfo",
@@ -46,13 +47,11 @@ __all__ = [
     "RelationInfo",
     "Resolution",
     "did_you_mean",
+    "kind_of",
     "local_name",
     "one_of",
     "with_article",
 ]
-
-SKM: Final = Namespace("https://skimesh.dev/ontology#")
-"""The skimesh namespace; ontology IRI ``https://skimesh.dev/ontology``."""
 
 Resolution: TypeAlias = Literal["latest", "most_confident", "fused"]
 RESOLUTIONS: Final = ("latest", "most_confident", "fused")
@@ -215,3 +214,19 @@ class Declarations:
     datatypes: frozenset[str]
     iris: dict[str, URIRef]
     """The IRI of every name (names are unique across namespaces and kinds)."""
+
+
+_KIND_OF_TYPE: Final[dict[type, str]] = {t: k for k, t in TYPED_KINDS.items()}
+
+
+def kind_of(value: object) -> str | None:
+    """The value kind of a scalar (``bool`` is not an ``int`` here), or None."""
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int):
+        return "int"
+    if isinstance(value, float):
+        return "float"
+    if isinstance(value, str):
+        return "string"
+    return _KIND_OF_TYPE.get(type(value))

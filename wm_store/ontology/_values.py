@@ -22,7 +22,7 @@ from wm_store._errors import (
     ValidationError,
 )
 from wm_store.ontology._cardinality import OntologyCardinality
-from wm_store.ontology._literals import kind_of, typed_problem
+from wm_store.ontology._literals import typed_problem
 from wm_store.ontology._terms import (
     SCALAR_KINDS,
     TYPED_KINDS,
@@ -30,6 +30,7 @@ from wm_store.ontology._terms import (
     DataPropertyInfo,
     Declarations,
     did_you_mean,
+    kind_of,
     one_of,
     with_article,
 )

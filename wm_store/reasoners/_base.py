@@ -31,12 +31,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from importlib.metadata import EntryPoint, entry_points
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from wm_store._errors import PropertyValueError, WmError
-from wm_store.ontology import Ontology
 from wm_store.protocol import Value
 from wm_store.scene import SceneState
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = [
     "ENTRY_POINT_GROUP",
@@ -101,7 +103,7 @@ class Reasoner(Protocol):
         ...
 
 
-ReasonerFactory = Callable[[SceneState, Ontology], Reasoner]
+ReasonerFactory = Callable[[SceneState, "Ontology"], Reasoner]
 """Builds a reasoner bound to a view; a reasoner class taking ``(view, ontology)`` is one."""
 
 

@@ -32,10 +32,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from wm_store._errors import ElementNotFoundError, PropertyValueError, ValidationError
-from wm_store.ontology import Ontology
 from wm_store.protocol import (
     Color,
     Element,
@@ -47,6 +46,9 @@ from wm_store.protocol import (
 )
 from wm_store.reasoners._spatial import SpatialReasoner
 from wm_store.scene import SceneState, id_sort_key
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["SimilarityReasoner", "classify", "identify", "property_similarity", "similarity"]
 

@@ -20,10 +20,9 @@ a loop.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 from wm_store._errors import ElementNotFoundError, ValidationError
-from wm_store.ontology import Ontology
 from wm_store.protocol import (
     Element,
     Orientation,
@@ -36,6 +35,9 @@ from wm_store.protocol import (
 )
 from wm_store.reasoners._base import FrameCycleError, MissingDataError
 from wm_store.scene import SceneState
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = [
     "SpatialReasoner",

@@ -12,7 +12,15 @@ state) and the client (its replica), so both index and answer the same way.
 - :func:`min_cardinality_violations`: the minimum-cardinality report (``CheckCardinality``).
 - :func:`ownership` / :func:`check_writer`: what each agent registered, and the store's refusal
   of an agent's write to another agent's elements (:class:`Ownership`, :data:`STRUCTURE`).
+
+Transactions (``_transactions``, which read Turtle with rdflib) load on first use (PEP 562).
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from wm_store._lazy import lazy_getattr
 
 from ._cardinality import min_cardinality_violations as min_cardinality_violations
 from ._ownership import STRUCTURE as STRUCTURE
@@ -28,9 +36,21 @@ from ._resolution import resolve_observations as resolve_observations
 from ._state import SceneState as SceneState
 from ._state import Undo as Undo
 from ._state import parse_id as parse_id
-from ._transactions import SELF as SELF
-from ._transactions import TxnResult as TxnResult
-from ._transactions import apply_transaction as apply_transaction
+
+if TYPE_CHECKING:
+    from ._transactions import SELF as SELF
+    from ._transactions import TxnResult as TxnResult
+    from ._transactions import apply_transaction as apply_transaction
+
+__getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
+    __name__,
+    {
+        "SELF": "._transactions",
+        "TxnResult": "._transactions",
+        "apply_transaction": "._transactions",
+    },
+)
+
 
 __all__ = [
     "SELF",

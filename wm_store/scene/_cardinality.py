@@ -13,12 +13,15 @@ It reads the state only through its indexes: the elements of classes that carry 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from wm_store._errors import ElementNotFoundError
-from wm_store.ontology import Ontology
 from wm_store.protocol import CardinalityViolation
 from wm_store.scene._query import id_sort_key
 from wm_store.scene._state import SceneState
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["min_cardinality_violations"]
 

@@ -22,11 +22,14 @@ how messages and listings name an element.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from wm_store._errors import DuplicateIdError, DuplicateLabelError, NameConflictError
-from wm_store.ontology import Ontology
 from wm_store.protocol import Element
 from wm_store.scene._state import SceneState, parse_id
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["NameGuard", "check_explicit_form", "display_name", "label_namespace"]
 

@@ -11,12 +11,14 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Callable, Collection, Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from wm_store.ontology import Ontology
 from wm_store.protocol import Element, Pose, Position, PropertyFilter, Query, Relation, Value
 from wm_store.scene._numeric_index import RANGE_OPS
 from wm_store.scene._state import SceneState
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["id_sort_key", "match_relations", "resolve"]
 

@@ -438,9 +438,11 @@ async def test_element_values_are_checked() -> None:
         (g,) = await w.gears(("box_a", 0.0))
         with pytest.raises(
             ParameterError,
-            match="no element 'Gear-99' in the world model; elements of class Gear: Gear-1",
+            match="no element 'Gear-99' in the world model; did you mean 'Gear-1'",
         ):
             specify(PICK, {"box": w["box_a"], "gear": "Gear-99"}, w.wm, robot=w["robot"])
+        with pytest.raises(ParameterError, match=r"'Zz'.*; elements of class Gear: Gear-1$"):
+            specify(PICK, {"box": w["box_a"], "gear": "Zz"}, w.wm, robot=w["robot"])
         with pytest.raises(ParameterTypeError) as wrong:
             specify(PICK, {"box": w["box_a"], "gear": w["box_b"]}, w.wm, robot=w["robot"])
         assert str(wrong.value) == (

@@ -134,18 +134,62 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
     assert capsys.readouterr().out.startswith("skimesh ")
 
 
-def test_the_command_line_loads_no_planner_simulator_or_viewer() -> None:
-    """``skimesh --help`` and every parser build import neither the planners (over a second),
-    MuJoCo, placo nor rerun: those load when a command needs them (a fresh interpreter)."""
+#: Loaded only by the commands that need them: the planners (over a second to import), the
+#: simulator, the viewer and rdflib (the ontology, loaded with the first world-model replica).
+HEAVY = ("unified_planning", "mujoco", "placo", "rerun", "rdflib")
+NOWHERE = "tcp/127.0.0.1:9"  # nothing listens: a client command fails at once, exit 3
+
+#: The light commands, run to their end (no router answers: they stop where they would connect).
+LIGHT = {
+    "help": ["--help"],
+    "version": ["--version"],
+    "agents help": ["agents", "--help"],
+    "agents": ["agents", "--connect", NOWHERE, "--timeout", "0.5"],
+    "skills": ["skills", "--connect", NOWHERE, "--timeout", "0.5"],
+    "wm get": ["wm", "get", "Gear-1", "--connect", NOWHERE, "--timeout", "0.5"],
+    "task status": ["task", "status", "t-1", "--connect", NOWHERE, "--timeout", "0.5"],
+}
+
+
+@pytest.mark.parametrize("name", sorted(LIGHT))
+def test_light_commands_load_no_planner_simulator_viewer_or_rdflib(name: str) -> None:
+    """``skimesh --help``, ``--version`` and the light commands import none of the heavy
+    packages (a fresh interpreter, the command run through ``main``)."""
     import subprocess
     import sys
 
-    heavy = ("unified_planning", "mujoco", "placo", "rerun")
     probe = (
-        "import sys; from skimesh.cli import build_parser; build_parser(); "
-        f"print([m for m in {heavy!r} if m in sys.modules])"
+        "import sys\n"
+        "from skimesh.cli import main\n"
+        "try:\n"
+        f"    code = main({LIGHT[name]!r})\n"
+        "except SystemExit as stop:\n"
+        "    code = stop.code\n"
+        f"print(code, [m for m in {HEAVY!r} if m in sys.modules])"
     )
     done = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=True
     )
-    assert done.stdout.strip() == "[]", done.stdout + done.stderr
+    code, loaded = done.stdout.strip().splitlines()[-1].split(" ", 1)
+    assert loaded == "[]", done.stdout + done.stderr
+    assert code == ("0" if "help" in name or name == "version" else "3"), done.stderr
+
+
+def test_the_list_of_commands_is_the_modules() -> None:
+    """``skimesh --help`` lists the commands from ``cli.COMMANDS`` without importing their
+    modules: every command a module adds is there, with the module's help, in its order."""
+    import argparse
+
+    from skimesh.cli import COMMANDS
+
+    def listed(parser: argparse.ArgumentParser) -> dict[str, object]:
+        (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return {c.dest: c.help for c in sub._choices_actions}
+
+    full = listed(build_parser())
+    assert full == {name: text for name, (_, text) in COMMANDS.items()}
+    assert list(full) == list(COMMANDS)
+    assert listed(build_parser(["--help"])) == full
+    for name, (module, _) in COMMANDS.items():
+        args = build_parser([name, "--help"])
+        assert listed(args) == full, f"{name} ({module})"
