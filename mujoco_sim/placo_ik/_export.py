@@ -22,8 +22,13 @@ per body (the generated robots do).
 
 from __future__ import annotations
 
+import ctypes
+import os
+import sys
 import tempfile
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeAlias
 
@@ -100,10 +105,34 @@ def load_placo_robot(robot: mujoco.MjSpec, *, keep_meshes: bool = False) -> Any:
     with tempfile.TemporaryDirectory(prefix="skimesh-placo-") as tmp:
         path = Path(tmp) / "robot.xml"
         path.write_text(text, encoding="utf-8")
+        flags = placo.Flags.mjcf | placo.Flags.ignore_collisions
         try:
-            return placo.RobotWrapper(str(path), placo.Flags.mjcf | placo.Flags.ignore_collisions)
+            with _c_stdout_to(Path(tmp) / "placo.out"):  # placo prints "Loading model: ..."
+                return placo.RobotWrapper(str(path), flags)
         except RuntimeError as exc:
             raise ModelError(f"placo cannot load the model: {exc}", source=str(path)) from exc
+
+
+@contextmanager
+def _c_stdout_to(file: Path) -> Iterator[None]:
+    """Send what C and C++ code print on the process's stdout to ``file`` while the block runs
+    (placo announces every model it loads there, which would mix with a command's output).
+    Python's own ``sys.stdout`` is flushed first; the C library's buffers before restoring."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(file, "wb") as sink:
+            os.dup2(sink.fileno(), 1)
+            try:
+                yield
+            finally:
+                _LIBC.fflush(None)
+                os.dup2(saved, 1)
+    finally:
+        os.close(saved)
+
+
+_LIBC = ctypes.CDLL(None)
 
 
 def _pose(elem: ET.Element) -> tuple[FloatArray, FloatArray]:

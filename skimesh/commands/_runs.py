@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable
 
 import msgspec
 
@@ -22,6 +22,7 @@ from skill_agent.client import AgentClient, list_agents
 from skill_agent.protocol import Progress, RunEvent, RunInfo, RunResult
 
 from ._connect import mesh_session
+from ._table import print_table
 
 __all__ = ["add_parsers"]
 
@@ -105,12 +106,6 @@ def run_row(agent: str, info: RunInfo, now: float) -> list[str]:
 HEAD = ("AGENT", "RUN", "SKILL", "PARAMS", "STATE", "STARTED", "ELAPSED", "OUTCOME")
 
 
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
-    widths = [max(len(r[i]) for r in (head, *rows)) for i in range(len(head))]
-    for row in (head, *rows):
-        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
-
-
 class _Show:
     def __init__(
         self, print_event: Callable[[RunEvent], None], print_json: Callable[[object], None]
@@ -132,7 +127,7 @@ class _Show:
             print("no runs")
             return 0
         now = time.time()
-        _table(HEAD, [run_row(a, i, now) for a, i in found])
+        print_table(HEAD, [run_row(a, i, now) for a, i in found])
         return 0
 
     async def one(self, args: argparse.Namespace) -> int:

@@ -36,6 +36,7 @@ from ..runtime import run_service
 from . import _runs as runs_command
 from ._connect import mesh_session
 from ._store_reads import registered_agents
+from ._table import print_table
 
 if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
     from skill_agent.runtime import AgentConfig
@@ -344,12 +345,6 @@ def _print_json(obj: object) -> None:
     sys.stdout.flush()
 
 
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
-    widths = [max(len(r[i]) for r in (head, *rows)) for i in range(len(head))]
-    for row in (head, *rows):
-        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
-
-
 async def _agents(args: argparse.Namespace) -> int:
     async with mesh_session(args) as mesh:
         alive = set(await list_agents(mesh, timeout=args.timeout))
@@ -380,7 +375,7 @@ async def _agents(args: argparse.Namespace) -> int:
             ]
             for r in rows
         ]
-        _table(head, cells)
+        print_table(head, cells)
     return 0
 
 
@@ -415,7 +410,7 @@ async def _skills(args: argparse.Namespace) -> int:
         for agent, reply in replies.items()
         for d in reply.skills
     ]
-    _table(("AGENT", "SKILL", "TYPE", "PARAMETERS", "DOC"), rows)
+    print_table(("AGENT", "SKILL", "TYPE", "PARAMETERS", "DOC"), rows)
     return 0
 
 

@@ -52,6 +52,7 @@ from . import _plan as plan_command
 from . import operator as operator_command
 from ._connect import mesh_session, wm_session
 from ._render import plain_help
+from ._table import print_table
 from ._task_output import ProgressPrinter, info_lines, print_json, print_problems
 
 __all__ = ["EXIT_CODES", "add_parser"]
@@ -433,10 +434,17 @@ async def _list(args: argparse.Namespace) -> int:
         tasks = await TaskClient(mesh, timeout=args.timeout).list(active_only=args.active)
     if args.json:
         print_json(tasks)
-    for info in [] if args.json else tasks:
-        state = f"{info.outcome} (paused)" if info.paused else info.outcome
-        print(f"{info.task_id:<14} {state:<10} {info.replans} replans  "
-              f"{info.goal or info.name}")  # fmt: skip
+    else:
+        rows = [
+            (
+                info.task_id,
+                f"{info.outcome} (paused)" if info.paused else info.outcome,
+                str(info.replans),
+                info.goal or info.name,
+            )
+            for info in tasks
+        ]
+        print_table(("TASK", "STATE", "REPLANS", "GOAL"), rows)
     return 0
 
 
