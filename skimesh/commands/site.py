@@ -91,6 +91,15 @@ def _up(args: argparse.Namespace) -> int:
     from ..site import LineView, LiveView, Supervisor
 
     plan, state = _plan(args)
+    if plan.security is not None:
+        from ..site import ensure_credentials
+
+        folder = ensure_credentials(plan)
+        print(
+            f"skimesh up: a secure site (TLS, a certificate per component, least-privilege "
+            f"ACL); credentials in {folder}; to use the CLI: --config {folder}/operator.json5",
+            file=sys.stderr,
+        )
     state.acquire()
     try:
         if sys.stderr.isatty():
@@ -168,12 +177,9 @@ async def _probe_all(plan: Plan) -> list[tuple[str, str]]:
 
     from ..site import probe
 
-    site = plan.site
-    config = str(plan.path.parent / site.zenoh_config) if site.zenoh_config else None
+    config = MeshConfig(connect=plan.connect, mesh=plan.site.mesh, config_file=plan.probe_config)
     try:
-        async with open_mesh(
-            MeshConfig(connect=plan.connect, mesh=site.mesh, config_file=config)
-        ) as mesh:
+        async with open_mesh(config) as mesh:
             return [
                 (c.name, "skipped (no `skimesh monitor` yet)" if c.kind == "monitor" else "")
                 if c.kind == "monitor"

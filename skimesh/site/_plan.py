@@ -14,10 +14,11 @@ import msgspec
 
 from ..errors import SkimeshError
 from ._schema import Agents, Router, Site
+from ._secure import OPERATOR, SiteSecurityPlan, security_of, tls
 
 __all__ = ["Component", "Plan", "SiteError", "load_site", "make_plan", "pick_host"]
 
-Kind = Literal["router", "store", "sim", "agents", "task-agent", "monitor"]
+Kind = Literal["router", "store", "sim", "agents", "task-agent", "monitor", "eventlog"]
 _ENDPOINT = re.compile(r"^(?P<proto>[a-z0-9-]+)/(?P<addr>\[[^\]]+\]|[^:/]+):(?P<port>\d+)(#.*)?$")
 _ANY = {"0.0.0.0", "[::]"}
 _LOCAL = "local"
@@ -39,6 +40,8 @@ class Component:
     ready: tuple[str, ...]
     """Its probe: ``("tcp", address, port)``, ``("store",)``, ``("devices",)``,
     ``("agents", name, ...)``, ``("tasks",)`` or ``()`` (no probe: the monitor)."""
+    serves: tuple[tuple[str, str], ...] = ()
+    """An agents process: (agent, its robot's label) of each agent it serves."""
 
 
 @dataclass(frozen=True)
@@ -52,6 +55,16 @@ class Plan:
     """Every component of every host, in start order."""
     connect: tuple[str, ...]
     """The router endpoints this host's processes connect to."""
+    security: SiteSecurityPlan | None = None
+    """Where the credentials are, on a secure site (None: an open mesh)."""
+
+    @property
+    def probe_config(self) -> str | None:
+        """The Zenoh config of ``skimesh up``'s own session (health checks, status)."""
+        if self.security is not None:
+            return self.security.client(OPERATOR)
+        zenoh = self.site.zenoh_config
+        return str(self.path.parent / zenoh) if zenoh else None
 
     def local(self) -> list[Component]:
         return [c for c in self.components if c.host == self.host]
@@ -123,6 +136,12 @@ class _Planner:
         self.hosts = _hosts(site)
         self.names: set[str] = set()
         self.scenario_ref = self._scenario(site.scenario) if site.scenario else ""
+        self.security = security_of(site, self.path)
+        if self.security is not None and site.zenoh_config:
+            raise SiteError(
+                "`zenoh_config` and `security` both configure the processes' Zenoh: leave "
+                'out `zenoh_config`, or set `security = "none"` and bring your own'
+            )
 
     def file(self, name: str) -> str:
         return str((self.path.parent / name).resolve())
@@ -189,11 +208,13 @@ class _Planner:
                         f"the router on {router_host} listens on every interface: give "
                         f"[hosts.{router_host}] an `address` for the other hosts"
                     )
-        return f"{proto}/{addr}:{port}"
+        return tls(f"{proto}/{addr}:{port}") if self.security else f"{proto}/{addr}:{port}"
 
-    def client(self, host: str) -> list[str]:
+    def client(self, host: str, name: str) -> list[str]:
         args = ["--connect", self.endpoint_for(host), "--mesh", self.site.mesh]
-        if self.site.zenoh_config:
+        if self.security is not None:
+            args += ["--config", self.security.client(name)]
+        elif self.site.zenoh_config:
             args += ["--config", self.file(self.site.zenoh_config)]
         return args
 
@@ -211,10 +232,12 @@ class _Planner:
         out += self.sim()
         out += self.agents()
         out += self.task_agent()
+        out += self.eventlog()
         if self.site.monitor is not None:
             where = self.host_of("the monitor", self.site.monitor.host)
             out.append(Component(self.name("", "monitor"), "monitor", where, (), ()))
-        return Plan(self.site, self.path, self.me, tuple(out), (self.endpoint_for(self.me),))
+        connect = (self.endpoint_for(self.me),)
+        return Plan(self.site, self.path, self.me, tuple(out), connect, self.security)
 
     def routers(self) -> list[Component]:
         out: list[Component] = []
@@ -234,9 +257,12 @@ class _Planner:
                 bound[(host, port)] = (name, addr)
             for endpoint in router.connect:
                 parse_endpoint(endpoint)
-            argv = ["router", *(a for e in router.listen for a in ("--listen", e))]
-            argv += [a for e in router.connect for a in ("--connect", e)]
-            if router.zenoh_config:
+            wrap = tls if self.security else str
+            argv = ["router", *(a for e in router.listen for a in ("--listen", wrap(e)))]
+            argv += [a for e in router.connect for a in ("--connect", wrap(e))]
+            if self.security is not None:
+                argv += ["--config", self.security.router()]
+            elif router.zenoh_config:
                 argv += ["--config", self.file(router.zenoh_config)]
             probe = parse_endpoint(self.reach(router, self.me))
             out.append(
@@ -248,13 +274,14 @@ class _Planner:
         store = self.site.store
         if store is None:
             return []
-        host = self.host_of("the store", store.host)
-        argv = ["wm", *self.client(host), "--data", store.data, "--durability", store.durability]
+        host, name = self.host_of("the store", store.host), self.name("", "store")
+        argv = ["wm", *self.client(host, name), "--data", store.data]
+        argv += ["--durability", store.durability]
         scenario = self._scenario(store.scenario) if store.scenario else self.scenario_ref
         if scenario:
             argv += ["--scenario", scenario]
         argv += [a for f in store.ontology for a in ("--ontology", self.file(f))]
-        return [Component(self.name("", "store"), "store", host, tuple(argv), ("store",))]
+        return [Component(name, "store", host, tuple(argv), ("store",))]
 
     def need_scenario(self, what: str) -> str:
         if not self.scenario_ref:
@@ -265,29 +292,32 @@ class _Planner:
         sim = self.site.sim
         if sim is None:
             return []
-        host = self.host_of("the simulator", sim.host)
-        argv = ["sim", *self.client(host), "--scenario", self.need_scenario("the simulator")]
+        host, name = self.host_of("the simulator", sim.host), self.name("", "sim")
+        argv = ["sim", *self.client(host, name), "--scenario", self.need_scenario("the simulator")]
         argv += ["--fast"] if sim.fast else []
         argv += ["--rerun", sim.rerun] if sim.rerun else ["--no-rerun"]
-        return [Component(self.name("", "sim"), "sim", host, tuple(argv), ("devices",))]
+        return [Component(name, "sim", host, tuple(argv), ("devices",))]
 
     def agents(self) -> list[Component]:
         out: list[Component] = []
         served: dict[str, str] = {}
         for group in self.site.agents:
             host = self.host_of("an agents process", group.host)
-            names, argv, default = self._agent_group(group)
+            names, argv, default, robots = self._agent_group(group)
             name = self.name(group.name, default)
             for agent in names:
                 if agent in served:
                     raise SiteError(f"agent {agent} is served twice: by {served[agent]} and {name}")
                 served[agent] = name
-            argv = ["agent", *self.client(host), *argv] + (["--simulate"] if group.simulate else [])
-            out.append(Component(name, "agents", host, tuple(argv), ("agents", *names)))
+            argv = ["agent", *self.client(host, name), *argv]
+            argv += ["--simulate"] if group.simulate else []
+            serves = tuple(zip(names, robots, strict=True))
+            out.append(Component(name, "agents", host, tuple(argv), ("agents", *names), serves))
         return out
 
-    def _agent_group(self, group: Agents) -> tuple[list[str], list[str], str]:
-        """(agent names, arguments, default component name) of one agents process."""
+    def _agent_group(self, group: Agents) -> tuple[list[str], list[str], str, list[str]]:
+        """(agent names, arguments, default component name, each agent's robot label) of one
+        agents process."""
         from skill_agent import SkillError
         from skill_agent.runtime import load_config
 
@@ -296,11 +326,13 @@ class _Planner:
         try:
             if group.configs:
                 files = [self.file(f) for f in group.configs]
-                names = [load_config(f).name for f in files]
+                configs = [load_config(f) for f in files]
+                names = [c.name for c in configs]
                 return (
                     names,
                     [a for f in files for a in ("--agent-config", f)],
                     "agents-" + "-".join(names),
+                    [c.robot.label or c.name for c in configs],
                 )
             from ..paths import read_scenario
 
@@ -313,17 +345,27 @@ class _Planner:
                     f"scenario {self.site.scenario!r} has no agent for {', '.join(unknown)}; "
                     f"it has: {', '.join(sorted(known)) or 'none'}"
                 )
-            names = [load_config(known[r]).name for r in robots]
+            configs = [load_config(known[r]) for r in robots]
         except SkillError as e:
             raise SiteError(f"agent config: {e}") from None
+        names = [c.name for c in configs]
         argv = ["--scenario", scenario, *(a for r in robots for a in ("--robot", r))]
-        return names, argv, "agents-" + "-".join(names)
+        return names, argv, "agents-" + "-".join(names), [c.robot.label or c.name for c in configs]
 
     def task_agent(self) -> list[Component]:
         task = self.site.task_agent
         if task is None:
             return []
-        host = self.host_of("the task agent", task.host)
-        argv = ["task-agent", *self.client(host)]
+        host, name = self.host_of("the task agent", task.host), self.name("", "task-agent")
+        argv = ["task-agent", *self.client(host, name)]
         argv += ["--operator", task.operator] if task.operator else []
-        return [Component(self.name("", "task-agent"), "task-agent", host, tuple(argv), ("tasks",))]
+        return [Component(name, "task-agent", host, tuple(argv), ("tasks",))]
+
+    def eventlog(self) -> list[Component]:
+        log = self.site.eventlog
+        if log is None:
+            return []
+        host, name = self.host_of("the event log", log.host), self.name("", "eventlog")
+        argv = ["eventlog", *self.client(host, name), "--data", log.data]
+        argv += [] if self.site.store is not None else ["--no-wm"]
+        return [Component(name, "eventlog", host, tuple(argv), ("eventlog",))]

@@ -15,6 +15,7 @@ from meshlink import Mesh, MeshlinkError
 from task_agent import TaskError
 from wm_store import WmError
 
+from ..errors import SkimeshError
 from ._plan import Component
 
 __all__ = ["ATTEMPT", "probe"]
@@ -42,7 +43,7 @@ async def probe(component: Component, mesh: Mesh | None) -> str:
         return "no mesh session yet"
     try:
         return await _over_mesh(kind, component.ready[1:], mesh)
-    except (MeshlinkError, WmError, TaskError, DeviceError, TimeoutError) as e:
+    except (MeshlinkError, WmError, TaskError, DeviceError, SkimeshError, TimeoutError) as e:
         return str(e) or type(e).__name__
 
 
@@ -68,5 +69,10 @@ async def _over_mesh(kind: str, names: tuple[str, ...], mesh: Mesh) -> str:
         from task_agent import TaskClient
 
         await TaskClient(mesh, timeout=ATTEMPT).list()
+        return ""
+    if kind == "eventlog":
+        from ..eventlog import EventLogClient
+
+        await EventLogClient(mesh, timeout=ATTEMPT).info()
         return ""
     raise ValueError(f"unknown probe {kind!r}")

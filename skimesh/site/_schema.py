@@ -30,7 +30,18 @@ from typing import Annotated, Literal
 
 from msgspec import Meta, Struct
 
-__all__ = ["Agents", "Host", "Monitor", "Restart", "Router", "Sim", "Site", "Store", "TaskAgent"]
+__all__ = [
+    "Agents",
+    "EventLog",
+    "Host",
+    "Monitor",
+    "Restart",
+    "Router",
+    "Sim",
+    "Site",
+    "Store",
+    "TaskAgent",
+]
 
 Seconds = Annotated[float, Meta(gt=0)]
 Name = Annotated[str, Meta(pattern=r"^([a-z0-9][a-z0-9_-]{0,31})?$")]
@@ -152,6 +163,19 @@ class Monitor(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     rrd: str = "monitor.rrd"
 
 
+class EventLog(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """The site event log (`skimesh eventlog`): every task, run, agent, device and
+    world-model event of the mesh in one SQLite file, read with `skimesh events` from any host.
+
+    Attributes:
+        host: The host that runs it (may be left out on a one-host site).
+        data: Its SQLite file, relative to the state directory of its host.
+    """
+
+    host: str = ""
+    data: str = "events.sqlite"
+
+
 class Restart(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """When `skimesh up` starts a process of its host again after it ended by itself.
 
@@ -192,9 +216,18 @@ class Site(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
         agents: The skill-agent processes.
         task_agent: The task agent (leave out for a site without one).
         monitor: A monitor (accepted and skipped: `skimesh monitor` does not exist yet).
+        eventlog: The site event log (`skimesh eventlog`).
         restart: The restart policy of every process.
         zenoh_config: A Zenoh JSON5 file for every process but the routers (`--config`),
-            relative to the site file.
+            relative to the site file (not with `security` on: it makes each process's own).
+        security: `auto`: when a router listens beyond loopback (`0.0.0.0`, a host's
+            address), the site runs on TLS only, with mutual TLS, one certificate per
+            component and a least-privilege access-control list, made by `skimesh up`; on
+            loopback it stays an open mesh. `tls`: always so. `none`: an open mesh (a trusted,
+            isolated network only).
+        credentials: The folder of the site's CA, certificates and Zenoh configs when
+            `security` is on, relative to the site file (default: `<site file name>-credentials`
+            beside it). Made if missing; copy it to every host of the site.
         ready_timeout (s): How long a process of this host may take to become ready.
         remote_timeout (s): How long to wait for a component of another host over the mesh.
         stop_grace (s): After SIGTERM, how long a process may take to stop before SIGKILL.
@@ -212,8 +245,11 @@ class Site(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
     agents: list[Agents] = []
     task_agent: TaskAgent | None = None
     monitor: Monitor | None = None
+    eventlog: EventLog | None = None
     restart: Restart = Restart()
     zenoh_config: str = ""
+    security: Literal["auto", "tls", "none"] = "auto"
+    credentials: str = ""
     ready_timeout: Seconds = 120.0
     remote_timeout: Seconds = 300.0
     stop_grace: Seconds = 10.0

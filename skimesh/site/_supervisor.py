@@ -154,9 +154,8 @@ class Supervisor:
         return 0
 
     def _mesh_config(self) -> MeshConfig:
-        site = self.plan.site
-        config = str(self.plan.path.parent / site.zenoh_config) if site.zenoh_config else None
-        return MeshConfig(connect=self.plan.connect, mesh=site.mesh, config_file=config)
+        plan = self.plan
+        return MeshConfig(connect=plan.connect, mesh=plan.site.mesh, config_file=plan.probe_config)
 
     async def _until_ready(self, proc: _Proc, timeout: float) -> str:
         """``""`` once ``proc``'s probe passes, else why not when its process ended or the time

@@ -1,8 +1,12 @@
 """A two-host site across network namespaces, one ``skimesh up`` per host: ``server`` runs
 the router, the store and the task agent; ``robots`` both kitting agents (simulated outcomes).
-The robots' host is started first and waits for the server's components over the mesh; a
-task submitted from the robots' host succeeds; ``skimesh down`` on each host stops its part
-(every PID gone). Needs root (skipped otherwise)."""
+The router listens beyond loopback, so the site is secure by default: the first ``skimesh up``
+makes the site's CA and a certificate per component (the other host reuses them: the folder
+is shared here, copied on a real site), and every process runs on mutual TLS under the
+least-privilege ACL. The robots' host is started first and waits for the server's components
+over the mesh; a task submitted from the robots' host with the operator's credential
+succeeds, while a client without one cannot even open a session; ``skimesh down`` on each
+host stops its part (every PID gone). Needs root (skipped otherwise)."""
 
 from __future__ import annotations
 
@@ -87,13 +91,19 @@ def test_a_two_host_site_comes_up_with_one_command_per_host_and_runs_a_task(
             pids = _pids(tmp_path / "server") | _pids(tmp_path / "robots")
             assert len(pids) == 4
 
-            endpoint = f"tcp/{lab.address('server')}:7447"
+            endpoint = f"tls/{lab.address('server')}:7447"
+            operator = str(tmp_path / "site-credentials" / "operator.json5")
             goal = "contain(KitBox-1, Gear-1)"
             done = lab.run(
                 "robots", "-m", "skimesh", "task", "submit", "--connect", endpoint,
-                "--mesh", mesh, "--goal", goal, timeout=120,
+                "--mesh", mesh, "--config", operator, "--goal", goal, timeout=120,
             )  # fmt: skip
             assert done.returncode == 0, done.stdout + done.stderr
+            anonymous = lab.run(
+                "robots", "-m", "skimesh", "agents", "--connect", endpoint, "--mesh", mesh,
+                timeout=60,
+            )  # fmt: skip
+            assert anonymous.returncode == 3, anonymous.stdout + anonymous.stderr
 
             status = lab.run("robots", "-m", "skimesh", "status", *where("robots"), "--probe")
             assert status.returncode == 0, status.stdout + status.stderr

@@ -3,6 +3,7 @@ restart policy, the state directory's lock."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,7 @@ from skimesh.site import (
     StateDir,
     default_state_dir,
     describe_exit,
+    ensure_credentials,
     load_site,
     make_plan,
     restart_delay,
@@ -63,7 +65,8 @@ def test_every_shipped_site_plans_for_each_of_its_hosts(path: Path) -> None:
         plan = make_plan(site, path, host)
         kinds = [c.kind for c in plan.components]
         assert kinds[0] == "router"
-        assert kinds == sorted(kinds, key=["router", "store", "sim", "agents", "task-agent"].index)
+        order = ["router", "store", "sim", "agents", "task-agent", "eventlog"]
+        assert kinds == sorted(kinds, key=order.index)
 
 
 def test_components_start_in_dependency_order_with_their_probes(tmp_path: Path) -> None:
@@ -76,14 +79,18 @@ def test_components_start_in_dependency_order_with_their_probes(tmp_path: Path) 
         ("task-agent", "server", ("tasks",)),
     ]
     assert [c.name for c in plan.local()] == ["agents-r1-r2"]
-    # robots reach the server's router by its address; the server by loopback
-    assert plan.connect == ("tcp/10.0.0.1:7447",)
+    # robots reach the server's router by its address; the server by loopback; on TLS, since
+    # the router listens beyond loopback (security "auto")
+    assert plan.connect == ("tls/10.0.0.1:7447",)
     agents = plan.components[3].argv
-    assert agents[:3] == ("agent", "--connect", "tcp/10.0.0.1:7447")
+    assert agents[:3] == ("agent", "--connect", "tls/10.0.0.1:7447")
+    assert plan.security is not None
+    assert agents[agents.index("--config") + 1] == str(plan.security.folder / "agents-r1-r2.json5")
+    assert plan.components[3].serves == (("r1", "r1"), ("r2", "r2"))
     assert agents[agents.index("--robot") : agents.index("--robot") + 2] == ("--robot", "r1")
     assert "--fast" in plan.components[2].argv
     server = _plan(tmp_path, TWO_HOSTS, "server")
-    assert server.connect == ("tcp/127.0.0.1:7447",)
+    assert server.connect == ("tls/127.0.0.1:7447",)
     assert server.components[0].ready == ("tcp", "127.0.0.1", "7447")
 
 
@@ -180,3 +187,36 @@ def test_the_state_directory_lock_admits_one_supervisor(tmp_path: Path) -> None:
     finally:
         first.release()
     assert second.holder() is None
+
+
+def test_a_site_is_secure_off_loopback_and_open_on_it(tmp_path: Path) -> None:
+    loopback = _plan(tmp_path, '[[routers]]\nlisten = ["tcp/127.0.0.1:7000"]\n[store]\n')
+    assert loopback.security is None and loopback.probe_config is None
+    assert "--config" not in loopback.components[1].argv
+    open_site = _plan(tmp_path, 'security = "none"\n' + TWO_HOSTS, "robots")
+    assert open_site.security is None and open_site.connect == ("tcp/10.0.0.1:7447",)
+    forced = _plan(tmp_path, 'security = "tls"\n[[routers]]\nlisten = ["tcp/127.0.0.1:7000"]\n')
+    assert forced.security is not None and forced.connect == ("tls/127.0.0.1:7000",)
+    router = forced.components[0].argv
+    assert router[router.index("--config") + 1] == str(forced.security.folder / "router.json5")
+    assert forced.probe_config == str(forced.security.folder / "operator.json5")
+    with pytest.raises(SiteError, match="`zenoh_config` and `security`"):
+        _plan(tmp_path, 'zenoh_config = "z.json5"\n' + TWO_HOSTS, "robots")
+
+
+def test_a_secure_sites_credentials_are_made_once_for_every_component(tmp_path: Path) -> None:
+    plan = _plan(tmp_path, TWO_HOSTS + '[eventlog]\nhost = "server"\n', "server")
+    assert plan.security is not None
+    folder = ensure_credentials(plan)
+    assert folder == plan.security.folder
+    made = {p.name for p in folder.iterdir()}
+    for name in ("store", "sim", "agents-r1-r2", "task-agent", "eventlog", "operator"):
+        assert {f"{name}.pem", f"{name}-key.pem", f"{name}.json5"} <= made, name
+    assert {"ca.pem", "router.pem", "router.json5"} <= made
+    ca = (folder / "ca.pem").read_bytes()
+    ensure_credentials(plan)  # again: the same CA
+    assert (folder / "ca.pem").read_bytes() == ca
+    router = (folder / "router.json5").read_text()
+    assert (
+        "agents-r1-r2" in json.loads(router)["access_control"]["subjects"][2]["cert_common_names"]
+    )
