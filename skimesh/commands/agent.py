@@ -26,7 +26,7 @@ import msgspec
 from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
-from skill_agent.protocol import Progress, RunEvent, RunResult, SkillDescription
+from skill_agent.protocol import RunEvent, RunResult, SkillDescription
 from wm_store import WmError
 from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
@@ -35,6 +35,7 @@ from ..errors import Exit, SkimeshError
 from ..runtime import run_service
 from . import _runs as runs_command
 from ._connect import mesh_session
+from ._run_view import RunLines, with_output
 from ._store_reads import registered_agents
 from ._table import print_table
 
@@ -450,13 +451,7 @@ def _convert(raw: str, kind: str, key: str) -> Value:
 
 
 def _print_event(event: RunEvent) -> None:
-    if isinstance(event, Progress):
-        done = f" ({event.fraction:.0%})" if event.fraction >= 0 else ""
-        step = f" {event.step}:" if event.step else ""
-        print(f"  [{event.state}]{step} {event.message}{done}".rstrip(), flush=True)
-    else:
-        status = "succeeded" if event.success else f"failed ({event.reason})"
-        print(f"{event.skill} {event.run_id} {status}: {event.message}".rstrip(), flush=True)
+    RunLines()(event)
 
 
 async def _run(args: argparse.Namespace) -> int:
@@ -466,16 +461,21 @@ async def _run(args: argparse.Namespace) -> int:
     ):
         skills = {d.name: d for d in await client.skills()}
         params = parse_params(args.params, skills.get(args.skill))
-        result: RunResult = await client.run(
-            args.skill,
-            params,
-            queue=args.queue,
-            simulate=args.simulate,
-            timeout=args.run_timeout,
-            deadline=args.deadline,
-            on_event=_print_json if args.json else _print_event,
-            author="cli",
-        )
+
+        async def run(on_event: Callable[[RunEvent], None]) -> RunResult:
+            return await client.run(
+                args.skill,
+                params,
+                queue=args.queue,
+                simulate=args.simulate,
+                timeout=args.run_timeout,
+                deadline=args.deadline,
+                on_event=on_event,
+                author="cli",
+            )
+
+        json_out = _print_json if args.json else None
+        result = await with_output(run, agent=args.agent, skill=args.skill, json_out=json_out)
     return 0 if result.success else EXIT_FAILED
 
 
