@@ -27,6 +27,7 @@ from ._messages import Liveness, MeshStatistics, Reply, Sample
 from ._publish import MeshPublisher, MeshToken
 from ._sender import Sender
 from ._serving import Handler, answer_query
+from ._shared import SharedSubscribers
 from ._subscription import Subscription, liveness_of, sample_of
 
 __all__ = ["Mesh", "open_mesh"]
@@ -64,6 +65,11 @@ class Mesh:
         self._gets = bridge.Counter()
         self._serving = bridge.Counter()
         self._tokens: set[MeshToken] = set()
+        self._shared = SharedSubscribers(
+            lambda key, callback: session.declare_subscriber(key, callback),
+            lambda: bridge.sync_with_router(session, port),
+            port,
+        )
 
     @property
     def session(self) -> zenoh.Session:
@@ -263,12 +269,27 @@ class Mesh:
         )
 
     @asynccontextmanager
-    async def subscribe(self, key_expr: str) -> AsyncIterator[Subscription[Sample]]:
+    async def subscribe(
+        self, key_expr: str, *, via: str | None = None
+    ) -> AsyncIterator[Subscription[Sample]]:
         """Subscribe to ``key_expr`` for the duration of the ``async with`` block. On entry the
         router knows the subscriber (one round trip), so anything published afterwards by any
-        session arrives."""
-        async with self._inbox(key_expr, liveliness=False) as inbox:
-            yield Subscription(inbox, sample_of)
+        session arrives.
+
+        ``via``: a wildcard over ``key_expr`` (``agents/r1/runs/*/progress`` for one run's
+        key): the subscription shares one Zenoh subscriber on ``via`` with every other one of
+        this mesh through it, so a fresh key per run, task or command leaves no state in the
+        router (``meshlink._shared``). Use it for short-lived subscriptions to fresh keys.
+        """
+        if via is None:
+            async with self._inbox(key_expr, liveliness=False) as inbox:
+                yield Subscription(inbox, sample_of)
+            return
+        try:
+            async with self._shared.subscribe(key_expr, via) as inbox:
+                yield Subscription(inbox, sample_of)
+        except zenoh.ZError as e:
+            raise self._zenoh_error(via, e) from None
 
     # ---------------------------------------------------------------- liveliness
     def declare_token(self, key_expr: str) -> MeshToken:

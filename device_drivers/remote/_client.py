@@ -92,8 +92,8 @@ class RemoteDevice:
         timeout = self.motion_timeout if motion else self.timeout
         if progress is None:
             return await self._send(p.Request(command=command), timeout)
-        key = self._mesh.keys.device_state(*self.key).removesuffix("state")
-        key += f"progress/{uuid.uuid4().hex[:16]}"
+        prefix = self._mesh.keys.device_state(*self.key).removesuffix("state") + "progress/"
+        key = prefix + uuid.uuid4().hex[:16]
         last = -1.0
 
         def report(payload: bytes) -> None:
@@ -101,7 +101,10 @@ class RemoteDevice:
             last = msgspec.msgpack.decode(payload, type=p.Progress).fraction
             progress(last)
 
-        async with self._mesh.subscribe(key) as updates, anyio.create_task_group() as tg:
+        # through one subscriber on progress/* per device: a fresh key per command would
+        # leave state behind in the router for good (meshlink._shared)
+        subscription = self._mesh.subscribe(key, via=prefix + "*")
+        async with subscription as updates, anyio.create_task_group() as tg:
 
             async def forward() -> None:
                 async for sample in updates:
