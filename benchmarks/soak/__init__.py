@@ -1,0 +1,1 @@
+"""A soak benchmark: the router's memory over thousands of tasks (``python -m benchmarks.soak``)."""
