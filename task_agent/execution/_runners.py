@@ -165,22 +165,25 @@ class CoreRunner:
                 send.send_nowait(event)
 
         unsubscribe = core.subscribe(forward)
-        accepted = False
+        ended = False
         try:
             with send, receive:
-                started = await core.start(request)
-                accepted = True
+                try:
+                    started = await core.start(request)
+                except SkillError:
+                    ended = True  # refused: nothing runs
+                    raise
                 on_started(started)
                 async for event in receive:
                     if isinstance(event, RunResult):
-                        accepted = False
+                        ended = True
                         if agent in self.gone:
                             raise AgentTransportError(f"agent {agent!r} vanished")
                         return event
                     on_event(event)
         finally:
             unsubscribe()
-            if accepted and agent not in self.gone:
+            if not ended and agent not in self.gone:  # cancelled, even while starting
                 with anyio.CancelScope(shield=True):
                     with contextlib.suppress(UnknownRunError):
                         on_event(await core.stop(request.run_id))

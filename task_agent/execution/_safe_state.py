@@ -37,7 +37,7 @@ from ..discovery import AgentInfo, Discovery
 from ..planning import PartialOrderPlan, to_partial_order
 from ..protocol import SafeState
 from ._state import StepSpec, WorldModel
-from ._steps import EventSink, StepScheduler
+from ._steps import EventSink, StepOutcome, StepScheduler
 
 if TYPE_CHECKING:
     from ._executor import PlanSource
@@ -113,15 +113,18 @@ class SafeStatePhase:
                 continue
             planned[name] = holding
             to_run += steps
+        failure: StepOutcome | None = None
         if to_run:
             with anyio.move_on_after(self.within):
-                await self.steps.run(to_run)
+                failure = await self.steps.run(to_run)
             await self._catch_up()
         for name, holding in planned.items():
             info = self.discovery.agent(name)
             still = held_by(info, self.wm) if info is not None else holding
             if still:
                 why = f"the put-down did not free {', '.join(self._label(o) for _, o in still)}"
+                if failure is not None and failure.agent == name:
+                    why += f": {failure}"
                 reports.append(self._report(name, holding, False, why))
             else:
                 reports.append(self._report(name, holding, True, "put down"))
