@@ -67,6 +67,8 @@ class Discovery:
         self._unknown: dict[str, float] = {}
         """Agents of unknown state: name -> when they become lost."""
         self._judge_wake = anyio.Event()
+        self.outages = 0
+        """How many times tokens vanished together (each a lost router or a partition)."""
         self._listeners: list[PresenceCallback] = []
         self._changed = anyio.Event()
         self._cache: tuple[object, list[AgentInfo]] | None = None
@@ -206,6 +208,7 @@ class Discovery:
                 )
                 for name in burst:
                     self._unknown[name] = now + self.grace
+                self.outages += 1
                 self._wake()
             else:
                 for name in burst:

@@ -312,7 +312,7 @@ class Executor:
                 reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
             else:
                 reason = str(failure)
-                if failure.reason in EXCLUDED_REASONS:
+                if failure.reason in EXCLUDED_REASONS and not await self._outage_during(failure):
                     excluded.add((failure.agent, failure.skill))
             if attempt >= self.options.max_replans:
                 if lost or self.steps.lost:
@@ -424,6 +424,13 @@ class Executor:
             sequential=order.sequential,
         )
         return steps
+
+    async def _outage_during(self, failure: StepOutcome) -> bool:
+        """Whether a lost router or a partition overlapped the failed step (its failure is
+        then no reason to leave the skill out): waits for the vanished tokens to be judged."""
+        await anyio.sleep(self.discovery.settle)
+        await self._await_agents()
+        return self.discovery.outages > failure.outages
 
     async def _await_agents(self) -> None:
         """Before planning: while agents are unknown (a lost router or a partition), until

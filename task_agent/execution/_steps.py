@@ -106,6 +106,9 @@ class StepOutcome(msgspec.Struct, kw_only=True):
     """Stopped by the scheduler (the failed branch), not a failure of its own."""
     params: dict[str, Value] = {}
     wm_writes: list[int] = []
+    outages: int = 0
+    """``Discovery.outages`` when the step began: a later count means a lost router or a
+    partition overlapped it (its failure may be the outage's, not the skill's)."""
 
     def __str__(self) -> str:
         text = f"step {self.index} {self.skill} on {self.agent or '?'}"
@@ -247,7 +250,12 @@ class StepScheduler:
         by_operator = params is not None and agent == self.operator_agent
         await self.hold.wait()  # a step spawned just before a pause starts after it
         outcome = StepOutcome(
-            index=spec.index, agent=agent, skill=spec.skill, success=False, reason="unavailable"
+            index=spec.index,
+            agent=agent,
+            skill=spec.skill,
+            success=False,
+            reason="unavailable",
+            outages=self.discovery.outages,
         )
         try:
             outcome.params = params or resolve_params(spec.params, self.ran, self.wm)
