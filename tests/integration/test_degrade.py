@@ -20,8 +20,8 @@ import anyio
 import pytest
 
 from meshlink.testing import free_port
-from task_agent import new_task_id
-from task_agent.protocol import StepFinished, StepStarted, TaskEvent, TaskFinished
+from task_agent import TaskClient, new_task_id
+from task_agent.protocol import SafeState, StepFinished, StepStarted, TaskEvent, TaskFinished
 
 from .procs import Child
 from .test_tasks import Site, place_robot, running_site
@@ -47,7 +47,7 @@ async def held(site: Site, robot: str) -> list[str]:
 
 
 async def run_goal(
-    site: Site, goal: str, on_event: Callable[[TaskEvent], Awaitable[None]]
+    site: Site, goal: str, on_event: Callable[[TaskClient, TaskEvent], Awaitable[None]]
 ) -> list[TaskEvent]:
     """Robots r1 at station-1, r2 at station-2; ``goal`` submitted and followed to its end."""
     async with site.connected() as (_, wm, client):
@@ -58,14 +58,14 @@ async def run_goal(
             await client.submit_goal(goal, task_id=task_id)
             async for event in stream:
                 events.append(event)
-                await on_event(event)
+                await on_event(client, event)
     return events
 
 
 def test_killing_an_agent_mid_task_ends_partial(module_router: str, tmp_path: Path) -> None:
     with running_site(module_router, tmp_path) as site:
 
-        async def kill_r2(event: TaskEvent) -> None:
+        async def kill_r2(_client: TaskClient, event: TaskEvent) -> None:
             if isinstance(event, StepStarted) and event.agent == "r2":
                 os.kill(site.agents["r2"].pid, signal.SIGKILL)
 
@@ -85,6 +85,27 @@ def test_killing_an_agent_mid_task_ends_partial(module_router: str, tmp_path: Pa
         assert "lost:     contain(kit-r2, gear-2)" in watched.stdout, watched.stdout
 
 
+def test_an_abort_while_a_robot_holds_a_part_puts_it_down(
+    module_router: str, tmp_path: Path
+) -> None:
+    with running_site(module_router, tmp_path, time_scale=0.2) as site:
+
+        async def abort_when_held(client: TaskClient, event: TaskEvent) -> None:
+            if isinstance(event, StepFinished) and event.skill == "pick" and event.success:
+                await client.abort(event.task_id, "test abort while holding")
+
+        goal = "contain(kit-r1, gear-1) and contain(kit-r1, gear-3)"
+        events = anyio.run(run_goal, site, goal, abort_when_held)
+        done = events[-1]
+        assert isinstance(done, TaskFinished) and done.outcome == "aborted", done
+        [safe] = [e for e in events if isinstance(e, SafeState)]
+        assert safe.agent == "r1" and safe.ok and safe.holding, safe
+        assert anyio.run(held, site, "r1") == []
+        watched = site.skimesh("task", "watch", done.task_id)
+        assert watched.returncode == 3, watched.stdout + watched.stderr
+        assert f"safe state r1: put down {safe.holding[0]}" in watched.stdout, watched.stdout
+
+
 def test_a_router_restart_mid_task_ends_in_success(tmp_path: Path) -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     routers = [start_router(endpoint)]
@@ -98,7 +119,7 @@ def test_a_router_restart_mid_task_ends_in_success(tmp_path: Path) -> None:
                 routers.append(start_router(endpoint))
                 outage.append(time.monotonic() - stopped)
 
-            async def restart_once(event: TaskEvent) -> None:
+            async def restart_once(_client: TaskClient, event: TaskEvent) -> None:
                 if not outage and isinstance(event, StepStarted):
                     await anyio.to_thread.run_sync(restart)
 
