@@ -20,8 +20,20 @@ A **task file** (hand-written sequence / parallel blocks, verified by the servic
 here) runs as written; a failed step fails the task (there is no goal to plan towards), unless
 the operator takes the step over (semi-autonomy, see ``_steps``).
 
+When a replan after a **lost agent** finds no plan for the whole goal, the goal facts the
+agents left can still reach are pursued (:meth:`Executor._salvage`: the facts that hold, then
+each open fact a plan still reaches together with those kept), and the task ends ``partial``
+with a :class:`~task_agent.protocol.PartialResult` (facts achieved, facts lost and why, agents
+lost at which step). Before planning, agents of unknown state (a lost router, a partition:
+:class:`~task_agent.discovery.Discovery`) are waited for, within the grace period; a step that
+failed while such an outage lasted does not leave its skill out of later plans.
+
+A task that ends unfinished (``partial``, ``failed``, ``aborted``) then runs the **safe-state
+phase** (:class:`~task_agent.execution.SafeStatePhase`): its robots put down what they hold.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
-``StepProgress`` / ``StepFinished``, ``Replanning``, one ``TaskFinished``.
+``StepProgress`` / ``StepFinished``, ``Replanning``, ``SafeState`` (after an unfinished
+ending), one ``TaskFinished``.
 :meth:`Executor.abort` stops every run of the task (each agent brings its robot to a safe
 state) and ends it ``aborted``; so does cancelling the executor (the service shutting down).
 :meth:`Executor.pause` holds the task (no new step starts, its runs are paused on their agents;

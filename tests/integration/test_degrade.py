@@ -23,20 +23,10 @@ from meshlink.testing import free_port
 from task_agent import TaskClient, new_task_id
 from task_agent.protocol import SafeState, StepFinished, StepStarted, TaskEvent, TaskFinished
 
-from .procs import Child
+from .test_cli_router import start_router
 from .test_tasks import Site, place_robot, running_site
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow]
-
-
-def start_router(endpoint: str) -> Child:
-    router = Child(["-m", "skimesh", "router", "--listen", endpoint], name="router")
-    try:
-        router.wait_stderr("router listening")
-    except BaseException:
-        router.stop()
-        raise
-    return router
 
 
 async def held(site: Site, robot: str) -> list[str]:
@@ -108,7 +98,7 @@ def test_an_abort_while_a_robot_holds_a_part_puts_it_down(
 
 def test_a_router_restart_mid_task_ends_in_success(tmp_path: Path) -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    routers = [start_router(endpoint)]
+    routers = [start_router("--listen", endpoint, name="router")]
     try:
         with running_site(endpoint, tmp_path, time_scale=0.3) as site:  # a pick: 1.2 s
             outage: list[float] = []
@@ -116,7 +106,7 @@ def test_a_router_restart_mid_task_ends_in_success(tmp_path: Path) -> None:
             def restart() -> None:
                 stopped = time.monotonic()
                 assert routers[-1].stop() == 0, routers[-1].log()
-                routers.append(start_router(endpoint))
+                routers.append(start_router("--listen", endpoint, name="router"))
                 outage.append(time.monotonic() - stopped)
 
             async def restart_once(_client: TaskClient, event: TaskEvent) -> None:

@@ -13,7 +13,7 @@ import pytest
 
 from task_agent import parse_goal
 from task_agent.discovery import Discovery
-from task_agent.execution._safe_state import held_by
+from task_agent.execution import held_by
 from task_agent.protocol import (
     Replanning,
     SafeState,
