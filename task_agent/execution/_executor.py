@@ -264,11 +264,16 @@ class Executor:
 
     async def _safe_state(self) -> None:
         """The safe-state phase (:mod:`._safe_state`): the task's robots put down what they
-        hold. Never fails the task's ending."""
+        hold. Never fails the task's ending; an abort during it (of a task that was not
+        aborted already) stops it, its runs preempted."""
+        self._scope = anyio.CancelScope()
         try:
-            await self.safe_state.run(self.steps.used)
+            with self._scope:
+                await self.safe_state.run(self.steps.used)
         except Exception:
             _log.exception("task %s: the safe-state phase failed", self.task_id)
+        if self._scope.cancelled_caught:
+            _log.warning("task %s: safe-state phase stopped: %s", self.task_id, self._abort_reason)
 
     def _finish(self, outcome: TaskOutcome, message: str) -> TaskFinished:
         self.outcome, self.finished_at = outcome, time.time()
