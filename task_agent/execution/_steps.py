@@ -7,8 +7,12 @@ run is reported as ``StepStarted``, its progress as ``StepProgress``, its end as
 
 After the first failure no step starts any more; the in-flight steps of the failed step's agent
 (the failed branch) are stopped, the others finish, and :meth:`StepScheduler.run` returns the
-failure. A step whose agent's liveliness token disappears is stopped at once and fails with
-reason ``agent_lost``. Cancelling :meth:`StepScheduler.run` (abort) stops every run: each ends
+failure. A step whose agent is lost (:class:`~task_agent.discovery.Discovery`: its token gone
+while others stay, or not back within the grace period) is stopped at once and fails with
+reason ``agent_lost``; the loss is recorded in :attr:`StepScheduler.lost` (which agent, at
+which step) for a ``partial`` ending. A step whose agent is *unknown* (its token gone with
+others': a lost router) waits before it starts until the agent is back or lost; its runs
+already started go on. Cancelling :meth:`StepScheduler.run` (abort) stops every run: each ends
 ``preempted`` once the agent's ``on_preempt`` brought the robot to a safe state.
 
 With :class:`~task_agent.execution.RunWrites` (the agents' event logs), each
