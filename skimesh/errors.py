@@ -31,6 +31,9 @@ class Exit(IntEnum):
     """The task was aborted (``task abort``, the operator) before it ended."""
     CONTRADICTED = 5
     """The task succeeded in the world model but the physics contradicts it."""
+    PARTIAL = 6
+    """The task ended ``partial``: an agent was lost; the goal facts still reachable were
+    achieved, the others lost (the report says which and why)."""
     INTERRUPTED = 130
     """Ctrl-C or SIGTERM stopped the command (a run in flight is stopped)."""
 

@@ -339,6 +339,7 @@ class TaskClient:
             replans=info.replans,
             duration=info.finished_at - info.started_at,
             check=info.check,
+            partial=info.partial,
         )
 
     async def run_goal(
@@ -395,9 +396,9 @@ class OperatorClient:
             reply = decode_operator_reply(data)
         except RemoteError as e:
             raise _remote_error(e.payload) from None
-        except NoReplyError:
+        except NoReplyError as e:
             raise TaskTransportError(
-                f"no operator agent answered on {key} within {self.timeout:g} s (it runs inside "
+                f"no operator agent answered on {key} {e.when} (it runs inside "
                 "`skimesh task-agent` unless started with --no-operator)"
             ) from None
         except MeshlinkError as e:  # WireError too: an undecodable reply

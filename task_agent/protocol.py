@@ -34,10 +34,13 @@ __all__ = [
     "HistoryReply",
     "ListPending",
     "ListTasks",
+    "LostAgent",
+    "LostFact",
     "OkReply",
     "OperatorReply",
     "OperatorRequest",
     "Parallel",
+    "PartialResult",
     "PauseTask",
     "PendingReply",
     "PendingStep",
@@ -45,6 +48,7 @@ __all__ = [
     "PlannedStep",
     "Replanning",
     "ResumeTask",
+    "SafeState",
     "SeenAt",
     "Sequence",
     "StepFinished",
@@ -231,7 +235,9 @@ TaskRequest: TypeAlias = (
 
 # --------------------------------------------------------------------------- events
 
-TaskOutcome = Literal["running", "succeeded", "failed", "unsolvable", "aborted"]
+TaskOutcome = Literal["running", "succeeded", "failed", "unsolvable", "aborted", "partial"]
+"""``partial``: an agent was lost, some goal facts became unreachable without it, and the
+agents left achieved every fact still reachable (:class:`PartialResult` says which)."""
 
 
 class PlannedStep(Struct, frozen=True, kw_only=True):
@@ -356,6 +362,50 @@ class GoalCheck(Struct, frozen=True, kw_only=True):
         return [f for f in self.facts if f.in_wm and f.physics is False]
 
 
+class LostAgent(Struct, frozen=True, kw_only=True):
+    """An agent lost while the task ran (its liveliness token gone, or out of reach for longer
+    than the grace period)."""
+
+    agent: str
+    step: int = -1
+    """The step it was running when lost (-1: none)."""
+    skill: str = ""
+    message: str = ""
+
+
+class LostFact(Struct, frozen=True, kw_only=True):
+    """A goal fact the agents left cannot reach."""
+
+    fact: str
+    """With labels, as in :class:`FactCheck`."""
+    why: str
+
+
+class PartialResult(Struct, frozen=True, kw_only=True):
+    """What a task that lost an agent achieved (outcome ``partial``; ``failed`` when it
+    achieved none of the goal's facts)."""
+
+    achieved: list[str] = []
+    """The goal facts that hold at the end (with labels)."""
+    lost: list[LostFact] = []
+    lost_agents: list[LostAgent] = []
+
+
+class SafeState(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
+    """The task ended unfinished: one robot of the task put down what it held (``ok``), or
+    could not (``message`` says why). Its put-down runs are ordinary steps (``StepStarted``,
+    ``StepFinished``), numbered after the task's last step."""
+
+    task_id: str
+    seq: int
+    stamp: float
+    agent: str
+    holding: list[str] = []
+    """What it held (labels) when the task ended."""
+    ok: bool = False
+    message: str = ""
+
+
 class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     task_id: str
     seq: int
@@ -367,6 +417,8 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     duration: float = 0.0
     check: GoalCheck | None = None
     """A succeeded goal task: each goal fact in the world model and in the physics."""
+    partial: PartialResult | None = None
+    """A task that lost an agent and could not reach every goal fact without it."""
 
 
 class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
@@ -398,6 +450,7 @@ TaskEvent: TypeAlias = (
     | Replanning
     | TaskPaused
     | TaskResumed
+    | SafeState
     | TaskFinished
 )
 
@@ -418,6 +471,8 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     """As in :class:`TaskFinished`, once the task has ended."""
     paused: bool = False
     """Held by ``PauseTask`` (no new step starts) until ``ResumeTask``."""
+    partial: PartialResult | None = None
+    """As in :class:`TaskFinished`, once the task has ended."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

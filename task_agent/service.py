@@ -363,13 +363,20 @@ async def serve_tasks(
     *,
     planners: PlannerFactory | None = None,
     operator: str | None = "operator",
+    grace: float = 15.0,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Serve the task agent on ``mesh`` until cancelled; with ``operator`` (a name), also the
     operator agent (:func:`~task_agent.operator.serve_operator`). ``started`` once
-    ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped)."""
+    ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped).
+    ``grace``: seconds agents whose tokens vanished together (a lost router, a partition)
+    stay unknown, their runs followed on, before they are lost (:class:`Discovery`)."""
     keys = mesh.keys
-    discovery = Discovery(wm)
+    discovery = Discovery(wm, grace=grace)
+
+    def reachable(agent: str) -> bool:
+        return discovery.is_alive(agent) or discovery.is_unknown(agent)
+
     writes = RunWrites()
 
     def publish(event: TaskEvent) -> None:
@@ -381,7 +388,7 @@ async def serve_tasks(
     service = TaskService(
         wm=wm,
         discovery=discovery,
-        runner=ZenohRunner(mesh, alive=discovery.is_alive),
+        runner=ZenohRunner(mesh, alive=reachable, lost_grace=grace + 1.0),
         publish=publish,
         planners=planners,
         operator_agent=operator or "",

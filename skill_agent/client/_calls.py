@@ -220,11 +220,16 @@ class AgentClient:
             author=author,
             wait=True,
         )
+        began = anyio.current_time()
         try:
             reply = await self._expect(request, RunFinished, timeout + 1.0)
         except AgentTransportError as exc:
+            waited = anyio.current_time() - began
             await self._stop_quietly(run_id)
-            raise TimeoutError(f"{skill} on {self.agent!r}: no result in {timeout} s") from exc
+            raise TimeoutError(
+                f"{skill} on {self.agent!r}: no result after {waited:.1f} s (limit {timeout:g} "
+                f"s): {exc}"
+            ) from exc
         except SkillError:
             raise  # refused: nothing runs
         except BaseException:  # cancelled: the run must not go on alone

@@ -98,37 +98,51 @@ async def follow_run(
 
     When the inbox stays quiet for ``client.status_every`` seconds, or the agent's token comes
     back after a loss, the run's status is asked for (a result missed during a reconnect is
-    found that way); the token gone for ``client.lost_grace`` seconds raises
-    :class:`AgentTransportError`."""
+    found that way). The agent out of reach (its token gone, or its status not answered) is
+    waited for up to ``client.lost_grace`` seconds, its status asked every
+    ``status_every`` s meanwhile; longer raises :class:`AgentTransportError`, saying how long
+    it was out of reach."""
     lost_since: float | None = None
     while True:
-        wait = client.status_every if lost_since is None else client.lost_grace
+        now = anyio.current_time()
+        if lost_since is not None and now - lost_since >= client.lost_grace:
+            raise AgentTransportError(
+                f"agent {client.agent!r} disappeared: out of reach for "
+                f"{now - lost_since:.1f} s (its liveliness token gone or its status not "
+                f"answered; grace "
+                f"{client.lost_grace:g} s) while run {run_id} was running"
+            )
+        wait = client.status_every
+        if lost_since is not None:
+            wait = min(wait, lost_since + client.lost_grace - now)
         item: RunEvent | Liveness | None = None
         try:
             item = inbox.receive_nowait()  # a burst of events needs no timer each
         except anyio.WouldBlock:
             with anyio.move_on_after(wait):
                 item = await inbox.receive()
-        if item is None:  # quiet for `wait` seconds
-            if lost_since is not None:
-                raise AgentTransportError(
-                    f"agent {client.agent!r} disappeared (liveliness token gone for "
-                    f"{client.lost_grace:g} s) while run {run_id} was running"
-                )
-            result = (await client.status(run_id)).result
-        elif isinstance(item, Liveness):
+        if isinstance(item, Liveness):
             if not item.alive:
-                lost_since = anyio.current_time()
+                lost_since = lost_since if lost_since is not None else anyio.current_time()
                 continue
             if lost_since is None:
                 continue  # the first "alive" of the watch's history
-            lost_since = None  # back (router restart): a result may have been missed
-            result = (await client.status(run_id)).result
-        else:
+        elif item is not None:
             yield item
             if isinstance(item, RunResult):
                 return
             continue
+        elif lost_since is not None and anyio.current_time() - lost_since >= client.lost_grace:
+            continue  # out of reach too long: raised above
+        # quiet, or back after a loss (router restart): a result may have been missed
+        try:
+            result = (await client.status(run_id)).result
+        except AgentTransportError as e:
+            if lost_since is None:
+                lost_since = anyio.current_time()
+            _log.info("run %s on %s: status not answered (%s); waiting", run_id, client.agent, e)
+            continue
+        lost_since = None
         if result is not None:
             yield result
             return

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 from task_agent.protocol import (
     Planned,
     Replanning,
+    SafeState,
     StepFinished,
     StepProgress,
     StepStarted,
@@ -31,7 +32,7 @@ from task_agent.protocol import (
     TaskStarted,
 )
 
-from ._task_output import pause_text, planned_after, planned_call
+from ._task_output import pause_text, planned_after, planned_call, safe_state_text
 
 if TYPE_CHECKING:  # rich loads when a view is shown, not for every command
     from rich.console import Console, RenderableType
@@ -102,6 +103,8 @@ class TaskView:
             case TaskPaused() | TaskResumed():
                 self.paused = isinstance(event, TaskPaused)
                 self.note = pause_text(event)
+            case SafeState():
+                self.note = safe_state_text(event)
             case TaskFinished():
                 self.finished, self.paused = event, False
 

@@ -12,9 +12,11 @@ import msgspec
 
 from task_agent.protocol import (
     GoalCheck,
+    PartialResult,
     Planned,
     PlannedStep,
     Replanning,
+    SafeState,
     StepFinished,
     StepProgress,
     StepStarted,
@@ -31,11 +33,13 @@ __all__ = [
     "ProgressPrinter",
     "check_lines",
     "info_lines",
+    "partial_lines",
     "pause_text",
     "planned_after",
     "planned_call",
     "print_json",
     "print_problems",
+    "safe_state_text",
     "step_line",
 ]
 
@@ -86,6 +90,8 @@ class ProgressPrinter:
                 return [f"{at}  replanning (attempt {event.attempt}): {event.reason}"]
             case TaskPaused() | TaskResumed():
                 return [f"{at}  {pause_text(event)}"]
+            case SafeState():
+                return [f"{at}  {safe_state_text(event)}"]
             case TaskFinished():
                 return self._summary(event)
 
@@ -122,7 +128,28 @@ class ProgressPrinter:
             lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
         if event.message:
             lines.append(f"  {event.message}")
-        return lines + check_lines(event.check)
+        return lines + partial_lines(event.partial) + check_lines(event.check)
+
+
+def safe_state_text(event: SafeState) -> str:
+    """``safe state r1: put down Gear-1`` / ``safe state r1: STILL HOLDS Gear-1: why``."""
+    held = ", ".join(event.holding) or "nothing"
+    if event.ok:
+        return f"safe state {event.agent}: put down {held}"
+    return f"safe state {event.agent}: STILL HOLDS {held}: {event.message}"
+
+
+def partial_lines(partial: PartialResult | None) -> list[str]:
+    """A task that lost an agent: the goal facts achieved, those lost and why, the agents
+    lost (at which step)."""
+    if partial is None:
+        return []
+    lines = ["  achieved: " + (", ".join(partial.achieved) or "none")]
+    lines += [f"  lost:     {f.fact}: {f.why}" for f in partial.lost]
+    for a in partial.lost_agents:
+        where = f" at step {a.step} ({a.skill})" if a.step >= 0 else ""
+        lines.append(f"  agent {a.agent} lost{where}: {a.message}")
+    return lines
 
 
 def pause_text(event: TaskPaused | TaskResumed) -> str:
@@ -159,6 +186,7 @@ def info_lines(info: TaskInfo) -> list[str]:
         f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
         f"{info.replans} replans",
         *([f"  {info.message}"] if info.message else []),
+        *partial_lines(info.partial),
         *check_lines(info.check),
     ]
 

@@ -19,7 +19,8 @@ when ``skimesh sim`` runs on the mesh, in the physics, with the simulated time o
 Exit codes of ``submit`` and ``watch``: 0 succeeded (and no goal fact contradicted by the
 physics), 1 failed, 2 unsolvable, 3 aborted, 4 usage or other errors (bad goal, a task file
 that does not verify, no task agent), 5 succeeded in the world model but the physics
-contradicts a goal fact; 130 interrupted (the task was aborted). ``verify``: 0 verifies,
+contradicts a goal fact, 6 partial (an agent was lost; the goal facts still reachable were
+achieved); 130 interrupted (the task was aborted). ``verify``: 0 verifies,
 1 problems, 4 errors. ``abort``: 0 the task has ended, 4 errors (or still running after the
 service's wait). ``status`` exits 0 whatever the task's state. ``status``,
 ``list`` and ``abort`` print JSON with ``--json`` (``abort``: the task's state plus the
@@ -64,6 +65,7 @@ EXIT_CODES = {
     "failed": Exit.FAILED,
     "unsolvable": Exit.REFUSED,
     "aborted": Exit.ABORTED,
+    "partial": Exit.PARTIAL,
 }
 EXIT_CONTRADICTED, EXIT_INTERRUPTED = Exit.CONTRADICTED, Exit.INTERRUPTED
 
@@ -93,6 +95,15 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "(default: operator)",
     )
     agent.add_argument(
+        "--grace",
+        type=float,
+        default=15.0,
+        metavar="S",
+        help="seconds agents whose liveliness tokens vanish together (a lost router or a "
+        "partition, not dead robots) stay 'unknown' before they count as lost; their runs "
+        "go on meanwhile (default: 15)",
+    )
+    agent.add_argument(
         "--no-operator",
         action="store_true",
         help="serve no operator agent (no step can fall back to a person)",
@@ -110,7 +121,8 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "simulator runs on the mesh, in the physics. Exit codes: 0 succeeded, 1 failed, "
         "2 unsolvable (or a usage error, an unknown element), 3 no task agent answered, "
         "4 aborted, 5 succeeded in the world model but contradicted by the physics, "
-        "130 interrupted (the task is aborted first).",
+        "6 partial (an agent was lost: the goal facts still reachable were achieved, the "
+        "others lost), 130 interrupted (the task is aborted first).",
     )
     what = submit.add_mutually_exclusive_group(required=True)
     what.add_argument("--goal", help='world-model facts, e.g. "contain(KitBox-1, Gear-3)"')
@@ -302,7 +314,7 @@ def _serve(args: argparse.Namespace) -> int:
                 ) as wm,
             ):
                 operator = None if args.no_operator else args.operator
-                await serve_tasks(mesh, wm, operator=operator)  # until cancelled
+                await serve_tasks(mesh, wm, operator=operator, grace=args.grace)
         except (WmError, MeshlinkError) as e:
             print(f"skimesh task-agent: {e}", file=sys.stderr)
             return exit_code(e)

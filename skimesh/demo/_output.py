@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from task_agent.protocol import (
     Planned,
     Replanning,
+    SafeState,
     StepFinished,
     StepProgress,
     StepStarted,
@@ -129,6 +130,9 @@ class MissionView:
                 return [f"replanning (attempt {event.attempt}): {event.reason}"]
             case TaskPaused() | TaskResumed():
                 return [f"task {'paused' if isinstance(event, TaskPaused) else 'resumed'}"]
+            case SafeState():
+                held = ", ".join(event.holding)
+                return [f"safe state {event.agent} ({held}): {event.message}"]
             case TaskFinished():
                 self.finished = event
                 self.sim_end, self.wall_end = sim, time.monotonic()

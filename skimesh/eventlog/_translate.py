@@ -33,6 +33,7 @@ from skill_agent.protocol import (
 from task_agent.protocol import (
     Planned,
     Replanning,
+    SafeState,
     StepFinished,
     StepProgress,
     StepStarted,
@@ -114,6 +115,10 @@ class Translator:
                     text += f": {event.reason}"
             case TaskResumed():
                 text = f"task {task} resumed ({len(event.runs)} runs)"
+            case SafeState():
+                robot = event.agent
+                held = ", ".join(event.holding)
+                text = f"task {task} safe state: {event.agent} held {held}: {event.message}"
             case TaskFinished():
                 self._runs_of_task.pop(task, None)
                 outcome = event.outcome

@@ -12,12 +12,14 @@
 - :class:`EventHistory` keeps a task's events for late watchers (bounded); the task-level
   pause (``Executor.pause`` / ``resume``) is the scheduler's hold (``_hold``).
 - :class:`RunWrites` follows the agents' event logs: the world-model revisions each run wrote.
+- :class:`SafeStatePhase`: when a task ends unfinished, its robots put down what they hold
+  (:func:`held_by`: what an agent's devices hold, from the world model).
 - The steps as data (pure): :class:`StepSpec`, :class:`StepGraph`, :func:`steps_from_plan`,
   :func:`steps_from_file`, :func:`resolve_params` (data flow) and :func:`unmet_goal`.
 
 The code: ``_state`` (the steps as data), ``_runners``, ``_run_writes``, ``_history``,
-``_hold`` (the pause), ``_steps`` (the scheduler) and ``_executor``. The executor plans
-through :mod:`task_agent.planning`, so this sub-package imports unified-planning.
+``_hold`` (the pause), ``_steps`` (the scheduler), ``_safe_state`` and ``_executor``. The
+executor plans through :mod:`task_agent.planning`, so this sub-package imports unified-planning.
 """
 
 from ._executor import EXCLUDED_REASONS as EXCLUDED_REASONS
@@ -33,6 +35,8 @@ from ._runners import OnEvent as OnEvent
 from ._runners import OnStarted as OnStarted
 from ._runners import SkillRunner as SkillRunner
 from ._runners import ZenohRunner as ZenohRunner
+from ._safe_state import SafeStatePhase as SafeStatePhase
+from ._safe_state import held_by as held_by
 from ._state import OPERATOR_NOTE as OPERATOR_NOTE
 from ._state import StepGraph as StepGraph
 from ._state import StepSpec as StepSpec
@@ -60,6 +64,7 @@ __all__ = [
     "OnStarted",
     "PlanSource",
     "RunWrites",
+    "SafeStatePhase",
     "SkillRunner",
     "StepGraph",
     "StepOutcome",
@@ -69,6 +74,7 @@ __all__ = [
     "WatchedRun",
     "WorldModel",
     "ZenohRunner",
+    "held_by",
     "resolve_params",
     "schedule",
     "steps_from_file",

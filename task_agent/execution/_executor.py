@@ -20,8 +20,20 @@ A **task file** (hand-written sequence / parallel blocks, verified by the servic
 here) runs as written; a failed step fails the task (there is no goal to plan towards), unless
 the operator takes the step over (semi-autonomy, see ``_steps``).
 
+When a replan after a **lost agent** finds no plan for the whole goal, the goal facts the
+agents left can still reach are pursued (:meth:`Executor._salvage`: the facts that hold, then
+each open fact a plan still reaches together with those kept), and the task ends ``partial``
+with a :class:`~task_agent.protocol.PartialResult` (facts achieved, facts lost and why, agents
+lost at which step). Before planning, agents of unknown state (a lost router, a partition:
+:class:`~task_agent.discovery.Discovery`) are waited for, within the grace period; a step that
+failed while such an outage lasted does not leave its skill out of later plans.
+
+A task that ends unfinished (``partial``, ``failed``, ``aborted``) then runs the **safe-state
+phase** (:class:`~task_agent.execution.SafeStatePhase`): its robots put down what they hold.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
-``StepProgress`` / ``StepFinished``, ``Replanning``, one ``TaskFinished``.
+``StepProgress`` / ``StepFinished``, ``Replanning``, ``SafeState`` (after an unfinished
+ending), one ``TaskFinished``.
 :meth:`Executor.abort` stops every run of the task (each agent brings its robot to a safe
 state) and ends it ``aborted``; so does cancelling the executor (the service shutting down).
 :meth:`Executor.pause` holds the task (no new step starts, its runs are paused on their agents;
@@ -43,11 +55,14 @@ from skill_agent import WorldView
 from wm_store import display_name
 
 from .._errors import DomainError, PlanningError, UnsolvableError
-from .._goals import Goal
+from .._goals import Goal, GoalLiteral
+from .._physics import fact_text
 from ..discovery import AgentInfo, Discovery
-from ..planning import Plan, to_partial_order
+from ..planning import PartialOrderPlan, Plan, to_partial_order
 from ..protocol import (
     GoalCheck,
+    LostFact,
+    PartialResult,
     Planned,
     Replanning,
     TaskEvent,
@@ -63,6 +78,7 @@ from ..protocol import (
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
+from ._safe_state import SafeStatePhase
 from ._state import (
     StepSpec,
     WorldModel,
@@ -148,6 +164,16 @@ class Executor:
         """Why each replan happened."""
         self.started_at = time.time()
         self.finished_at = 0.0
+        self.partial: PartialResult | None = None
+        """What a task that lost an agent achieved and lost (``partial``), once it ended."""
+        self.safe_state = SafeStatePhase(
+            wm=wm,
+            discovery=discovery,
+            steps=self.steps,
+            events=self.events,
+            planner=planner,
+            number=self._steps_of,
+        )
         self._scope = anyio.CancelScope()
         self._abort_reason = ""
         self._next_step = 0
@@ -202,6 +228,7 @@ class Executor:
             message=self.message,
             check=self.check,
             paused=self.paused and self.outcome == "running",
+            partial=self.partial,
         )
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
@@ -231,7 +258,22 @@ class Executor:
             message = f"internal error: {type(e).__name__}: {e}"
         if self._scope.cancelled_caught:
             outcome, message = "aborted", self._abort_reason
+        if outcome in ("partial", "failed", "aborted"):
+            await self._safe_state()
         return self._finish(outcome, message)
+
+    async def _safe_state(self) -> None:
+        """The safe-state phase (:mod:`._safe_state`): the task's robots put down what they
+        hold. Never fails the task's ending; an abort during it (of a task that was not
+        aborted already) stops it, its runs preempted."""
+        self._scope = anyio.CancelScope()
+        try:
+            with self._scope:
+                await self.safe_state.run(self.steps.used)
+        except Exception:
+            _log.exception("task %s: the safe-state phase failed", self.task_id)
+        if self._scope.cancelled_caught:
+            _log.warning("task %s: safe-state phase stopped: %s", self.task_id, self._abort_reason)
 
     def _finish(self, outcome: TaskOutcome, message: str) -> TaskFinished:
         self.outcome, self.finished_at = outcome, time.time()
@@ -247,6 +289,7 @@ class Executor:
             replans=self.replans,
             duration=self.finished_at - self.started_at,
             check=self.check,
+            partial=self.partial,
         )
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
@@ -254,41 +297,128 @@ class Executor:
             return "failed", "this executor has no planner: it can only run task files"
         excluded: set[tuple[str, str]] = set()
         attempt = 0
+        target = goal
+        """What is pursued: the goal, or what of it is still reachable after a lost agent."""
+        lost: list[LostFact] = []
+        salvaged = -1
         while True:
             try:
-                steps = await self._plan(goal, attempt, excluded)
+                steps = await self._plan(target, attempt, excluded)
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
                     return "unsolvable", str(e)
-                return "failed", f"replanning found no plan: {e}"
+                if not self.steps.lost or salvaged == attempt:
+                    return "failed", f"replanning found no plan: {e}"
+                salvaged = attempt
+                reachable, lost = await self._salvage(goal, str(e))
+                if reachable is None:
+                    return self._partial(goal, lost)
+                target = reachable
+                continue
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
             failure = await self.steps.run(steps)
             if failure is None:
                 await self._catch_up()
-                unmet = unmet_goal(goal, self.wm)
+                unmet = unmet_goal(target, self.wm)
                 if not unmet:
+                    if lost:
+                        return self._partial(goal, lost)
                     await self._verify(goal)
                     return "succeeded", f"the goal holds: {self.steps.steps_run} steps run"
                 reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
             else:
                 reason = str(failure)
-                if failure.reason in EXCLUDED_REASONS:
+                if failure.reason in EXCLUDED_REASONS and not await self._outage_during(failure):
                     excluded.add((failure.agent, failure.skill))
             if attempt >= self.options.max_replans:
+                if lost or self.steps.lost:
+                    self.partial = self._partial_result(goal, lost)
                 return "failed", f"{reason} (no replan left of {self.options.max_replans})"
             attempt += 1
             self.reasons.append(reason)
             self.events.emit(Replanning, attempt=attempt, reason=reason)
+
+    # ------------------------------------------------------------------ degraded
+
+    async def _salvage(self, goal: Goal, why: str) -> tuple[Goal | None, list[LostFact]]:
+        """After a lost agent left the goal unreachable: the facts the agents left can still
+        reach together (the ones that hold now, then each open fact that a plan with the others
+        kept still reaches), and the facts lost with why. None: nothing is left to do."""
+        assert self.planner is not None
+        label_of = self._label_of
+        keep: list[GoalLiteral] = []
+        open_: list[GoalLiteral] = []
+        for lit in goal.literals:
+            (open_ if unmet_goal(Goal(literals=(lit,)), self.wm) else keep).append(lit)
+        agents = self._agents(set())
+        gone = ", ".join(sorted(self.steps.lost))
+        lost: list[LostFact] = []
+        todo = 0
+        for lit in open_:
+            trial = Goal(literals=(*keep, lit))
+            try:
+                await self.planner.plan(agents, self.wm, trial)
+            except PlanningError as e:
+                detail = str(e).splitlines()[0] if str(e) else why
+                lost.append(
+                    LostFact(
+                        fact=fact_text(lit, label_of),
+                        why=f"unreachable with the agents left ({gone} lost): {detail}",
+                    )
+                )
+                continue
+            keep.append(lit)
+            todo += 1
+        _log.warning(
+            "task %s: %s lost; %d goal facts still reachable, %d lost",
+            self.task_id,
+            gone,
+            todo,
+            len(lost),
+        )
+        self.reasons.append(
+            f"{gone} lost: the goal is unreachable without it; pursuing the "
+            f"{len(keep)} of {len(goal.literals)} goal facts still reachable"
+        )
+        self.events.emit(Replanning, attempt=len(self.reasons), reason=self.reasons[-1])
+        return (Goal(literals=tuple(keep)) if todo else None), lost
+
+    def _partial_result(self, goal: Goal, lost: list[LostFact]) -> PartialResult:
+        achieved = [
+            fact_text(lit, self._label_of)
+            for lit in goal.literals
+            if not unmet_goal(Goal(literals=(lit,)), self.wm)
+        ]
+        return PartialResult(
+            achieved=achieved, lost=lost, lost_agents=list(self.steps.lost.values())
+        )
+
+    def _partial(self, goal: Goal, lost: list[LostFact]) -> tuple[TaskOutcome, str]:
+        self.partial = result = self._partial_result(goal, lost)
+        agents = "; ".join(
+            f"{a.agent} at step {a.step} {a.skill}" if a.step >= 0 else a.agent
+            for a in result.lost_agents
+        )
+        summary = (
+            f"{len(result.achieved)} of {len(goal.literals)} goal facts achieved; lost: "
+            + "; ".join(f.fact for f in lost)
+            + f" (agents lost: {agents})"
+        )
+        if not result.achieved:
+            return "failed", f"no goal fact achieved after losing an agent: {summary}"
+        return "partial", summary
+
+    def _label_of(self, element_id: str) -> str:
+        element = self.wm.find_element(element_id)
+        return element.label if element is not None and element.label else element_id
 
     async def _plan(
         self, goal: Goal, attempt: int, excluded: set[tuple[str, str]]
     ) -> list[StepSpec]:
         assert self.planner is not None
         await self._catch_up()
-        with anyio.move_on_after(self.agent_wait):
-            while not self.discovery.agents():
-                await self.discovery.wait_changed()
+        await self._await_agents()
         started = time.perf_counter()
         try:
             plan = await self.planner.plan(self._agents(excluded), self.wm, goal)
@@ -299,7 +429,7 @@ class Executor:
             plan = await self.planner.plan(self._agents(set()), self.wm, goal)
         order = await anyio.to_thread.run_sync(to_partial_order, plan)
         seconds = time.perf_counter() - started
-        steps = self._number(steps_from_plan(order, self._next_step))
+        steps = self._steps_of(order)
         self.events.emit(
             Planned,
             steps=[s.planned() for s in steps],
@@ -311,6 +441,31 @@ class Executor:
             sequential=order.sequential,
         )
         return steps
+
+    async def _outage_during(self, failure: StepOutcome) -> bool:
+        """Whether a lost router or a partition overlapped the failed step (its failure is
+        then no reason to leave the skill out): waits for the vanished tokens to be judged."""
+        await anyio.sleep(self.discovery.settle)
+        await self._await_agents()
+        return self.discovery.outages > failure.outages
+
+    async def _await_agents(self) -> None:
+        """Before planning: while agents are unknown (a lost router or a partition), until
+        each is back or lost (the grace period bounds it); when none is available, up to
+        ``agent_wait`` seconds for one."""
+        with anyio.move_on_after(self.agent_wait):
+            while not self.discovery.agents() and not self.discovery.unknown:
+                await self.discovery.wait_changed()
+        if self.discovery.unknown:
+            _log.warning(
+                "task %s: agents %s out of reach; waiting up to %g s before planning",
+                self.task_id,
+                ", ".join(sorted(self.discovery.unknown)),
+                self.discovery.grace,
+            )
+        with anyio.move_on_after(self.discovery.grace + self.discovery.settle + 1.0):
+            while self.discovery.unknown:
+                await self.discovery.wait_changed()
 
     def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
         agents = self.discovery.agents()
@@ -330,6 +485,10 @@ class Executor:
                 if element is not None:
                     names[element.id] = display_name(element)
         return names
+
+    def _steps_of(self, order: PartialOrderPlan) -> list[StepSpec]:
+        """The plan's steps, numbered after the task's steps so far."""
+        return self._number(steps_from_plan(order, self._next_step))
 
     def _number(self, steps: list[StepSpec]) -> list[StepSpec]:
         self._next_step += len(steps)

@@ -54,11 +54,24 @@ class SkillRunner(Protocol):
     async def resume(self, agent: str, run_id: str) -> None: ...
 
 
+class _Recovered(RunStarted, frozen=True, kw_only=True):
+    """A start whose answer was lost, found by the run's status (with its result if it has
+    ended meanwhile)."""
+
+    result: RunResult | None = None
+
+
 class ZenohRunner:
     """Runs skills on agents over ``mesh``. ``start_timeout``: the wait for a start's answer,
     which comes after the agent's pre-sensing and pre-condition check. ``alive(agent)``, when
-    given, says whether an agent's token is still there: a vanished agent is not asked to stop
-    (nobody would answer)."""
+    given, says whether an agent may still be reached (its token there, or its state unknown
+    for a grace period): a lost agent is not asked to stop (nobody would answer).
+
+    A start whose answer is lost (the router went away while it was on its way) is not a
+    failure yet: the run may have started. For up to ``lost_grace`` seconds, while ``alive``
+    says the agent may be reached, the agent is asked for the run's status (the run id is the
+    caller's): a run it knows is followed as if the answer had come, one it does not know is
+    started again with the same id."""
 
     def __init__(
         self,
@@ -85,19 +98,14 @@ class ZenohRunner:
         async with client.watch(request.run_id) as events:
             try:
                 try:
-                    started = await client.start(
-                        request.skill,
-                        request.params,
-                        run_id=request.run_id,
-                        timeout=request.timeout,
-                        simulate=request.simulate,
-                        author=request.author,
-                        request_timeout=self.start_timeout,
-                    )
+                    started = await self._start(client, request)
                 except SkillError as e:
                     ended = not isinstance(e, AgentTransportError)  # refused: nothing to stop
                     raise
                 on_started(started)
+                if isinstance(started, _Recovered) and started.result is not None:
+                    ended = True  # it ended while the answer was lost
+                    return started.result
                 async for event in events:
                     if isinstance(event, RunResult):
                         ended = True
@@ -107,6 +115,41 @@ class ZenohRunner:
                 if not ended:
                     await self._stop(client, request.run_id, on_event)
         raise AgentTransportError(f"the events of run {request.run_id} ended without a result")
+
+    async def _start(self, client: AgentClient, request: StartRun) -> RunStarted:
+        async def start() -> RunStarted:
+            return await client.start(
+                request.skill,
+                request.params,
+                run_id=request.run_id,
+                timeout=request.timeout,
+                simulate=request.simulate,
+                author=request.author,
+                request_timeout=self.start_timeout,
+            )
+
+        try:
+            return await start()
+        except AgentTransportError as lost:
+            since = anyio.current_time()
+            while anyio.current_time() - since < self.lost_grace:
+                if self.alive is not None and not self.alive(client.agent):
+                    break
+                await anyio.sleep(0.5)
+                try:
+                    info = await client.status(request.run_id)
+                except UnknownRunError:
+                    _log.info(
+                        "run %s never reached %s: starting it again", request.run_id, client.agent
+                    )
+                    return await start()
+                except AgentTransportError:
+                    continue
+                _log.info(
+                    "run %s on %s started though its answer was lost", info.run_id, client.agent
+                )
+                return _Recovered(run_id=info.run_id, params=info.params, result=info.result)
+            raise lost
 
     async def pause(self, agent: str, run_id: str) -> None:
         await AgentClient(self.mesh, agent, timeout=self.timeout).pause(run_id)
@@ -165,22 +208,25 @@ class CoreRunner:
                 send.send_nowait(event)
 
         unsubscribe = core.subscribe(forward)
-        accepted = False
+        ended = False
         try:
             with send, receive:
-                started = await core.start(request)
-                accepted = True
+                try:
+                    started = await core.start(request)
+                except SkillError:
+                    ended = True  # refused: nothing runs
+                    raise
                 on_started(started)
                 async for event in receive:
                     if isinstance(event, RunResult):
-                        accepted = False
+                        ended = True
                         if agent in self.gone:
                             raise AgentTransportError(f"agent {agent!r} vanished")
                         return event
                     on_event(event)
         finally:
             unsubscribe()
-            if accepted and agent not in self.gone:
+            if not ended and agent not in self.gone:  # cancelled, even while starting
                 with anyio.CancelScope(shield=True):
                     with contextlib.suppress(UnknownRunError):
                         on_event(await core.stop(request.run_id))

@@ -7,8 +7,12 @@ run is reported as ``StepStarted``, its progress as ``StepProgress``, its end as
 
 After the first failure no step starts any more; the in-flight steps of the failed step's agent
 (the failed branch) are stopped, the others finish, and :meth:`StepScheduler.run` returns the
-failure. A step whose agent's liveliness token disappears is stopped at once and fails with
-reason ``agent_lost``. Cancelling :meth:`StepScheduler.run` (abort) stops every run: each ends
+failure. A step whose agent is lost (:class:`~task_agent.discovery.Discovery`: its token gone
+while others stay, or not back within the grace period) is stopped at once and fails with
+reason ``agent_lost``; the loss is recorded in :attr:`StepScheduler.lost` (which agent, at
+which step) for a ``partial`` ending. A step whose agent is *unknown* (its token gone with
+others': a lost router) waits before it starts until the agent is back or lost; its runs
+already started go on. Cancelling :meth:`StepScheduler.run` (abort) stops every run: each ends
 ``preempted`` once the agent's ``on_preempt`` brought the robot to a safe state.
 
 With :class:`~task_agent.execution.RunWrites` (the agents' event logs), each
@@ -47,7 +51,14 @@ from wm_store.protocol import Value
 
 from .._errors import StepInputError
 from ..discovery import Discovery
-from ..protocol import StepFinished, StepProgress, StepStarted, TaskEvent, TaskOptions
+from ..protocol import (
+    LostAgent,
+    StepFinished,
+    StepProgress,
+    StepStarted,
+    TaskEvent,
+    TaskOptions,
+)
 from ._history import EventHistory
 from ._hold import Hold
 from ._run_writes import RunWrites
@@ -99,6 +110,9 @@ class StepOutcome(msgspec.Struct, kw_only=True):
     """Stopped by the scheduler (the failed branch), not a failure of its own."""
     params: dict[str, Value] = {}
     wm_writes: list[int] = []
+    outages: int = 0
+    """``Discovery.outages`` when the step began: a later count means a lost router or a
+    partition overlapped it (its failure may be the outage's, not the skill's)."""
 
     def __str__(self) -> str:
         text = f"step {self.index} {self.skill} on {self.agent or '?'}"
@@ -139,6 +153,11 @@ class StepScheduler:
         self.effects_revision = 0
         self.hold = Hold(runner, events.task_id)
         """The task-level pause (see the module doc)."""
+        self.used: set[str] = set()
+        """The agents that ran a step of the task (the task's robots)."""
+        self.lost: dict[str, LostAgent] = {}
+        """The task's agents lost while it ran (the first loss of each)."""
+        self._planned_agents: set[str] = set()
         self._running: dict[int, _Running] = {}
         self._wake: MemoryObjectSendStream[StepOutcome | None] | None = None
         self._tg: TaskGroup | None = None
@@ -163,6 +182,7 @@ class StepScheduler:
     async def run(self, steps: list[StepSpec]) -> StepOutcome | None:
         """Run ``steps``; returns the first failure, or None when every step succeeded."""
         graph = StepGraph(steps)
+        self._planned_agents = {s.agent for s in steps if s.agent}
         failure: StepOutcome | None = None
         send, receive = anyio.create_memory_object_stream[StepOutcome | None](math.inf)
         unsubscribe = self.discovery.on_presence(self._presence)
@@ -234,7 +254,12 @@ class StepScheduler:
         by_operator = params is not None and agent == self.operator_agent
         await self.hold.wait()  # a step spawned just before a pause starts after it
         outcome = StepOutcome(
-            index=spec.index, agent=agent, skill=spec.skill, success=False, reason="unavailable"
+            index=spec.index,
+            agent=agent,
+            skill=spec.skill,
+            success=False,
+            reason="unavailable",
+            outages=self.discovery.outages,
         )
         try:
             outcome.params = params or resolve_params(spec.params, self.ran, self.wm)
@@ -244,6 +269,7 @@ class StepScheduler:
         if not agent:
             outcome.message = f"no available agent offers {spec.skill!r}"
             return self._finished(outcome, by_operator)
+        await self.discovery.wait_known(agent)  # out of reach: back, or lost, within the grace
         if not self.discovery.is_alive(agent):
             outcome.message = f"agent {agent} is not available (no liveliness token)"
             return self._finished(outcome, by_operator)
@@ -260,6 +286,7 @@ class StepScheduler:
             if self.hold.started(agent, started.run_id) and self._tg is not None:
                 self._tg.start_soon(self.hold.pause_run, agent, started.run_id)
             self.steps_run += 1
+            self.used.add(agent)
             outcome.params = dict(started.params)
             if spec.call_id:
                 self.ran[spec.call_id] = dict(started.params)
@@ -335,6 +362,8 @@ class StepScheduler:
             outcome.success, outcome.reason, outcome.message = False, reason, message + detail
 
     def _finished(self, outcome: StepOutcome, by_operator: bool) -> StepOutcome:
+        if outcome.reason == "agent_lost":
+            self._record_loss(outcome.agent, outcome.index, outcome.skill, outcome.message)
         self.events.emit(
             StepFinished,
             step=outcome.index,
@@ -356,6 +385,16 @@ class StepScheduler:
                 running.why = (reason, message, stopped)
                 running.scope.cancel()
 
+    def _record_loss(self, agent: str, step: int, skill: str, message: str) -> None:
+        if agent and agent not in self.lost:
+            self.lost[agent] = LostAgent(agent=agent, step=step, skill=skill, message=message)
+
     def _presence(self, agent: str, alive: bool) -> None:
-        if not alive:
-            self._stop(agent, "agent_lost", f"agent {agent} vanished (liveliness)", False)
+        if alive:
+            return
+        message = f"agent {agent} vanished (liveliness)"
+        if agent in self._planned_agents | self.used and not any(
+            r.agent == agent for r in self._running.values()
+        ):
+            self._record_loss(agent, -1, "", message + " between its steps")
+        self._stop(agent, "agent_lost", message, False)

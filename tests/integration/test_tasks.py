@@ -193,14 +193,15 @@ def site(module_router: str, tmp_path_factory: pytest.TempPathFactory) -> Iterat
 
 
 @contextmanager
-def running_site(endpoint: str, folder: Path) -> Iterator[Site]:
-    """A fresh mesh on ``endpoint``: the store, agents r1 and r2, the scene, the task agent."""
+def running_site(endpoint: str, folder: Path, time_scale: float = TIME_SCALE) -> Iterator[Site]:
+    """A fresh mesh on ``endpoint``: the store, agents r1 and r2 (simulated runs last
+    ``duration * time_scale``), the scene, the task agent."""
     s = Site(endpoint, f"it-{uuid.uuid4().hex[:10]}", folder)
     store = start_store(s.endpoint, s.mesh, folder / "wm")
     task_agent: Child | None = None
     try:
         for name in ("r1", "r2"):
-            s.spawn_agent(name)
+            s.spawn_agent(name, time_scale=time_scale)
         for name in ("r1", "r2"):
             s.agents[name].wait_stderr(f"agent {name} ready")
 
