@@ -62,7 +62,9 @@ class Mirror:
             if len(layout.base_joints) == 3:
                 x, y, yaw = (self._adr(j) for j in layout.base_joints)
                 self._bases[robot.name] = (x, y, yaw)
-        self.openings = {r.name: d.opening(self.data) for r, d in self._drives()}
+        self.openings: dict[str, float] = {
+            r.name: float(d.opening(self.data)) for r, d in self._drives()
+        }
         self._free: dict[str, int] = {}
         for label in self.plant.facts.objects:
             body = m.body(label)
