@@ -14,15 +14,17 @@ from the devices' published states and the objects' poses, then hands it to a
 - an appliance state's door angle sets its door hinge;
 - an object's world pose sets its free joint (objects without one stay where they stand).
 
-Threads: the ``set_*`` methods only store values; :meth:`Mirror.sample` writes them into the
-model's data, runs the kinematics and lets the recorder sample. Call :meth:`start` and
-:meth:`sample` from one thread at a time (a worker thread in async code).
+Threads: the ``set_*`` methods only store values (under a lock: call them from the event
+loop); :meth:`Mirror.sample` writes them into the model's data, runs the kinematics and lets
+the recorder sample. Call :meth:`start` and :meth:`sample` from one thread at a time (a worker
+thread in async code).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import partial
+from threading import Lock
 from typing import Any
 
 import mujoco
@@ -75,6 +77,7 @@ class Mirror:
             for a in scenario.appliances
             if mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{a.label}/door") >= 0
         }
+        self._lock = Lock()
         self._pending: dict[int, float] = {}  # qpos address -> value, written by sample()
         self._poses: dict[str, WorldPose] = {}
         self.applied = 0
@@ -104,18 +107,22 @@ class Mirror:
     # ------------------------------------------------------------------ taking states
     def set_base(self, robot: str, pose: Pose2D) -> None:
         if robot in self._bases:
-            for adr, value in zip(self._bases[robot], (pose.x, pose.y, pose.yaw), strict=True):
-                self._pending[adr] = value
+            with self._lock:
+                values = (pose.x, pose.y, pose.yaw)
+                self._pending.update(zip(self._bases[robot], values, strict=True))
             self.applied += 1
 
     def set_arm(self, robot: str, joints: Mapping[str, float]) -> None:
         prefix = self._arms.get(robot)
         if prefix is None:
             return
+        taken = {}
         for name, value in joints.items():
             full = name if name.startswith(prefix) else prefix + name
             if mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, full) >= 0:
-                self._pending[self._adr(full)] = value
+                taken[self._adr(full)] = value
+        with self._lock:
+            self._pending.update(taken)
         self.applied += 1
 
     def set_gripper(self, robot: str, state: GripperState) -> None:
@@ -124,18 +131,20 @@ class Mirror:
             return
         self.openings[robot] = state.opening
         if isinstance(drive, TendonDrive):
-            for adr in drive.fingers:
-                self._pending[int(adr)] = state.opening / 2
+            with self._lock:
+                self._pending.update((int(adr), state.opening / 2) for adr in drive.fingers)
         self.applied += 1
 
     def set_appliance(self, label: str, state: ApplianceState) -> None:
         if label in self._doors:
-            self._pending[self._doors[label]] = state.door_angle
+            with self._lock:
+                self._pending[self._doors[label]] = state.door_angle
             self.applied += 1
 
     def set_object(self, label: str, pose: WorldPose) -> None:
         if label in self._free:
-            self._poses[label] = pose
+            with self._lock:
+                self._poses[label] = pose
             self.applied += 1
 
     def apply(self, owner: str, device: str, message: StateMessage) -> None:
@@ -164,10 +173,11 @@ class Mirror:
         recorder.sample(self.model, self.data)
 
     def _write(self) -> None:
-        pending, self._pending = self._pending, {}
+        with self._lock:
+            pending, self._pending = self._pending, {}
+            poses, self._poses = self._poses, {}
         for adr, value in pending.items():
             self.data.qpos[adr] = value
-        poses, self._poses = self._poses, {}
         for label, p in poses.items():
             adr = self._free[label]
             self.data.qpos[adr : adr + 7] = (p.x, p.y, p.z, p.qw, p.qx, p.qy, p.qz)
