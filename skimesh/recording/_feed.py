@@ -100,8 +100,8 @@ class MissionFeed:
         their events)."""
         try:
             running = await client.list(active_only=True)
-        except TaskError as e:
-            _log.info("no running tasks listed: %s", e)
+        except TaskError as e:  # e.g. an ACL that keeps tasks/rpc from this user
+            _log.warning("running tasks not listed (%s): tasks are followed from their events", e)
             return
         for info in running:
             self._follow(tg, client, info.task_id)
