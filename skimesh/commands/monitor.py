@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import socket
 import sys
 from functools import partial
 from pathlib import Path
@@ -66,8 +67,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help=f"stream to a running viewer (default URL: {DEFAULT_VIEWER})")  # fmt: skip
     p.add_argument("--serve-web", action="store_true",
                    help="serve rerun's web viewer (http://BIND:WEB_PORT)")  # fmt: skip
-    p.add_argument("--bind", default="127.0.0.1",
-                   help="address --serve-web listens on (default: %(default)s)")  # fmt: skip
+    p.add_argument("--bind", default="127.0.0.1", help="address the recording's data is served "
+                   "on with --serve-web (default: %(default)s; rerun serves the viewer's page, "
+                   "static files, on every interface)")  # fmt: skip
     p.add_argument("--web-port", type=int, default=9090, help="web viewer port (default: 9090)")
     p.add_argument("--grpc-port", type=int, default=9876,
                    help="port of the data the web viewer reads (default: 9876)")  # fmt: skip
@@ -100,9 +102,10 @@ def _recorder(args: argparse.Namespace) -> tuple[Recorder, list[str]]:
         lines.append(f"streaming to the viewer at {args.connect_viewer}")
     if args.serve_web:
         sinks.append(rr.GrpcServerSink(bind_ip=args.bind, port=args.grpc_port))
-        data = f"rerun+http://{args.bind}:{args.grpc_port}/proxy"
+        host = socket.gethostname() if args.bind in ("0.0.0.0", "::") else args.bind
+        data = f"rerun+http://{host}:{args.grpc_port}/proxy"
         rr.serve_web_viewer(web_port=args.web_port, open_browser=False, connect_to=data)
-        lines.append(f"web viewer: http://{args.bind}:{args.web_port}/?url={data}")
+        lines.append(f"web viewer: http://{host}:{args.web_port}/?url={data}")
     recorder.rec.set_sinks(*sinks)
     return recorder, lines
 
