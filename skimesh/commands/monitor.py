@@ -78,6 +78,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--rate", type=float, default=25.0, help="world samples per second")
     p.add_argument("--truth-period", type=float, default=0.2, metavar="S",
                    help="seconds between two requests of the objects' poses")  # fmt: skip
+    p.add_argument("--recent", type=float, default=0.0, metavar="S", help="also record the "
+                   "tasks that ended in the last S seconds, from their history")  # fmt: skip
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a service")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S wall seconds")
     p.set_defaults(func=_run)
@@ -126,6 +128,7 @@ def _run(args: argparse.Namespace) -> int:
         rate=args.rate,
         truth_period=args.truth_period,
         timeout=args.timeout,
+        recent=args.recent,
     )
     recorder, lines = _recorder(args)
 

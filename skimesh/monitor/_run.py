@@ -60,6 +60,8 @@ class MonitorOptions:
     """Seconds between two requests of the objects' poses to the simulator."""
     timeout: float = 5.0
     """Seconds to wait for the world model and the task agent."""
+    recent: float = 0.0
+    """Also record the tasks that ended within this many seconds (from their history)."""
 
 
 @dataclass
@@ -132,7 +134,7 @@ async def run_monitor(
         world = WorldFeed(
             mirror, recorder, clock, wm=wm, rate=options.rate, truth_period=options.truth_period
         )
-        mission = MissionFeed(recording, timeout=options.timeout)
+        mission = MissionFeed(recording, timeout=options.timeout, recent=options.recent)
         async with anyio.create_task_group() as tg:
             await tg.start(world.run, mesh)
             await tg.start(mission.run, mesh)

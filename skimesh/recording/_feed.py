@@ -4,7 +4,8 @@
 :class:`~skimesh.recording.MissionRecording` from the mesh:
 
 - **tasks**: it subscribes to every task's events (``tasks/*/events``) and, once subscribed,
-  asks the task agent for the tasks running now (a monitor started mid-task); each task, found
+  asks the task agent for the tasks running now (a monitor started mid-task) and, with
+  ``recent``, those that ended within the last ``recent`` seconds; each task, found
   either way, is followed by :meth:`task_agent.TaskClient.watch`, which fetches the events the
   task agent kept (``TaskHistory``: from ``TaskStarted`` and the plan, seq 1) and then follows
   the live ones, each ``seq`` once. The wildcard subscription only discovers tasks;
@@ -19,6 +20,7 @@ event.
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 
 import anyio
@@ -39,7 +41,9 @@ _log = logging.getLogger(__name__)
 
 class MissionFeed:
     """Follows the mesh into ``recording`` (see the module doc). ``on_event``: called with
-    each task event after it is recorded (e.g. a terminal view)."""
+    each task event after it is recorded (e.g. a terminal view); ``recent``: seconds back in
+    which an ended task is still recorded from its history (its end time on the task agent's
+    clock, compared with this host's)."""
 
     def __init__(
         self,
@@ -47,8 +51,10 @@ class MissionFeed:
         *,
         on_event: Callable[[TaskEvent], object] | None = None,
         timeout: float = 5.0,
+        recent: float = 0.0,
     ) -> None:
         self.recording = recording
+        self.recent = recent
         self.on_event = on_event
         self.timeout = timeout
         self.followed: set[str] = set()
@@ -68,8 +74,9 @@ class MissionFeed:
     async def run(
         self, mesh: Mesh, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED
     ) -> None:
-        """Follow until cancelled; ``started`` once every subscription is in place (the tasks
-        running then are being fetched)."""
+        """Follow until cancelled; ``started`` once every subscription is in place and the
+        tasks running then are found (their history is being fetched; a task agent that does
+        not answer delays it by ``timeout``)."""
         client = TaskClient(mesh, timeout=self.timeout)
         async with anyio.create_task_group() as tg:
             await tg.start(record_agent_events, mesh, self.recording.agents)
@@ -83,8 +90,8 @@ class MissionFeed:
             anyio.create_task_group() as tg,
             mesh.subscribe(mesh.keys.tasks_events()) as samples,
         ):
+            await self._running(tg, client)
             task_status.started()
-            tg.start_soon(self._running, tg, client)
             async for sample in samples:
                 if sample.kind != "put":
                     continue
@@ -96,15 +103,17 @@ class MissionFeed:
                 self._follow(tg, client, task_id)
 
     async def _running(self, tg: TaskGroup, client: TaskClient) -> None:
-        """The tasks running now (none when no task agent answers: new ones are found by
-        their events)."""
+        """The tasks running now and those ended within ``recent`` s (none when no task agent
+        answers: new ones are found by their events)."""
         try:
-            running = await client.list(active_only=True)
+            tasks = await client.list(active_only=self.recent <= 0)
         except TaskError as e:  # e.g. an ACL that keeps tasks/rpc from this user
             _log.warning("running tasks not listed (%s): tasks are followed from their events", e)
             return
-        for info in running:
-            self._follow(tg, client, info.task_id)
+        since = time.time() - self.recent
+        for info in tasks:
+            if info.outcome == "running" or info.finished_at >= since:
+                self._follow(tg, client, info.task_id)
 
     def _follow(self, tg: TaskGroup, client: TaskClient, task_id: str) -> None:
         if task_id and task_id not in self.followed:

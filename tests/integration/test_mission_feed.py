@@ -1,7 +1,8 @@
 """The mission feed over real Zenoh (loopback router, unique mesh), the path ``skimesh demo``
 and ``skimesh monitor`` record tasks through: joined while a task is held in its middle, it
 finds the task (the task agent's list), records its kept history from seq 1, then its live
-events to the end, each once and in order; the agent's event log lands beside it."""
+events to the end, each once and in order; the agent's event log lands beside it. Joined after
+the task's end, it records the task from its history only when asked to (``recent``)."""
 
 from __future__ import annotations
 
@@ -65,6 +66,23 @@ async def test_a_feed_joined_mid_task_records_it_from_seq_1_each_event_once(
             tg.cancel_scope.cancel()
         rec.flush()
         rec.disconnect()
+
+        # after its end: recorded from its history only when asked for (recent), else not
+        later: dict[float, list[TaskEvent]] = {0.0: [], 600.0: []}
+        for recent, got in later.items():
+            quiet = MissionRecording(
+                rr.RecordingStream("skimesh-test"), sim_clock=float, label_of=str
+            )
+            after = MissionFeed(quiet, on_event=got.append, recent=recent)
+            async with anyio.create_task_group() as tg:
+                await tg.start(after.run, monitor)  # the tasks to follow found
+                assert after.followed == ({task_id} if recent else set())
+                if recent:
+                    with anyio.fail_after(20):
+                        await after.wait_ended(task_id)
+                tg.cancel_scope.cancel()
+        assert later[0.0] == []
+        assert [e.seq for e in later[600.0]] == [e.seq for e in seen]
 
     assert feed.followed == {task_id}
     assert [e.seq for e in seen] == list(range(1, len(seen) + 1)), "from seq 1, each once"
