@@ -63,10 +63,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "down": ("site", "stop the site `skimesh up` runs on this host"),
     "status": ("site", "the state of each component of a site"),
+    "monitor": (
+        "monitor",
+        "follow a running site into rerun: world, tasks, plan, changes, agents' logs",
+    ),
 }
 
 #: Every command module, in the order they add their commands.
-MODULES = ("router", "wm", "agent", "demo", "sim", "task", "events", "site")
+MODULES = ("router", "wm", "agent", "demo", "sim", "task", "events", "site", "monitor")
 
 
 class _Version(argparse.Action):

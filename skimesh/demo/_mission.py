@@ -1,7 +1,8 @@
 """The mission of ``skimesh demo``: submit the goal, follow it, verify it, sum it up.
 
 :func:`run_mission` submits the goal to the task agent through a :class:`TaskClient` (over
-Zenoh, as any client would), prints and records every event, and stops early when asked
+Zenoh, as any client would), prints every event (the recording follows the mesh on its own:
+:class:`skimesh.recording.MissionFeed`, as ``skimesh monitor`` does), and stops early when asked
 (``stop``: the first Ctrl-C) or when the simulation fails: the task is then aborted, which
 stops every run (each skill's ``on_preempt`` brings its robot to a safe state), and its last
 events are still shown. Once the task ended, every goal fact is checked in the world model
@@ -19,7 +20,6 @@ import anyio
 from task_agent import Goal, TaskClient, new_task_id
 from task_agent.protocol import TaskFinished, TaskOptions
 
-from ..recording import MissionRecording
 from ._check import FactCheck, goal_holds, verify_goal
 from ._output import MissionView
 from ._stack import Stack
@@ -68,7 +68,6 @@ async def run_mission(
     *,
     options: TaskOptions,
     view: MissionView,
-    recording: MissionRecording | None,
     stop: anyio.Event,
     deadline: float = math.inf,
     out: Out = print,
@@ -84,8 +83,6 @@ async def run_mission(
         async with anyio.create_task_group() as tg:
             tg.start_soon(_abort_on, stop, stack, client, task_id, out)
             async for event in events:
-                if recording is not None:
-                    recording.task_event(event)
                 view(event)
                 if isinstance(event, TaskFinished):
                     finished = event

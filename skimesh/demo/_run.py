@@ -28,8 +28,8 @@ from wm_store.protocol import Value
 from ..errors import DemoError
 from ..recording import (
     CallText,
+    MissionFeed,
     MissionRecording,
-    record_agent_events,
     record_scene,
     step_text,
 )
@@ -129,18 +129,22 @@ async def run_demo(setup: DemoSetup, recorder: Recorder, stop: anyio.Event) -> i
             task_options = TaskOptions(
                 max_replans=setup.max_replans, planner_timeout=setup.planner_timeout
             )
-            # the agents' event logs (agents/*/events) into the recording, for the mission
-            async with background(record_agent_events, stack.mesh, recording.agents):
+            # the task's events and the agents' logs into the recording, from the mesh, by
+            # the path `skimesh monitor` takes
+            feed = MissionFeed(recording)
+            async with background(feed.run, stack.mesh):
                 result = await run_mission(
                     stack,
                     goal,
                     options=task_options,
                     view=view,
-                    recording=recording,
                     stop=stop,
                     deadline=setup.deadline,
                     out=_print,
                 )
+                if result.finished is not None:  # its last events recorded too
+                    with anyio.move_on_after(10):
+                        await feed.wait_ended(result.finished.task_id)
             for line in summary_lines(result, view, recording=str(setup.rrd)):
                 _print(line)
                 recording.note(line, level="INFO" if result.goal_reached else "WARN")

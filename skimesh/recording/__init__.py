@@ -4,11 +4,15 @@
   and every world-model change into the world's recording stream (:class:`CallText`,
   :func:`step_text`: the lines it writes; :func:`wm_store.describe_change` words the
   world-model changes);
+- :class:`MissionFeed` fills it from the mesh: every task's events (the running ones from
+  their kept history first) and every agent's event log; ``skimesh demo`` and ``skimesh
+  monitor`` both record through it;
 - :func:`record_agent_events` follows the skill agents' event logs into it
   (:class:`AgentEventLines`, :func:`entry_line`, :func:`describe_ops`);
 - :func:`blueprint` is the viewer's default layout; :func:`record_scene` sends it framed on a
   world (:func:`scene_layout`: :func:`frame` of :func:`scene_points`, :class:`Eye`) with
-  labels on its robots and objects (:class:`Label`, :class:`SceneLayout`);
+  labels on its robots and objects (:class:`Label`, :class:`SceneLayout`; :func:`send_layout`
+  does it for a layout made elsewhere, :func:`scene_cameras` names the image views);
 - :class:`BeliefLayer` draws where the world model believes each object is (ghosts under
   ``belief/``; :meth:`MissionRecording.follow_beliefs`);
 - :func:`inspect_recording`, :func:`recorded_eye`, :func:`recorded_views` and
@@ -25,6 +29,7 @@ from ._agents import entry_line as entry_line
 from ._agents import record_agent_events as record_agent_events
 from ._belief import BeliefLayer as BeliefLayer
 from ._blueprint import blueprint as blueprint
+from ._feed import MissionFeed as MissionFeed
 from ._framing import Eye as Eye
 from ._framing import frame as frame
 from ._framing import scene_points as scene_points
@@ -39,7 +44,9 @@ from ._recorded import recorded_views as recorded_views
 from ._scene import Label as Label
 from ._scene import SceneLayout as SceneLayout
 from ._scene import record_scene as record_scene
+from ._scene import scene_cameras as scene_cameras
 from ._scene import scene_layout as scene_layout
+from ._scene import send_layout as send_layout
 
 __all__ = [
     "AgentEventLines",
@@ -47,6 +54,7 @@ __all__ = [
     "CallText",
     "Eye",
     "Label",
+    "MissionFeed",
     "MissionRecording",
     "RecordingFacts",
     "SceneLayout",
@@ -60,7 +68,9 @@ __all__ = [
     "record_scene",
     "recorded_eye",
     "recorded_views",
+    "scene_cameras",
     "scene_layout",
     "scene_points",
+    "send_layout",
     "step_text",
 ]

@@ -50,7 +50,8 @@ class BeliefLayer:
     def entity(label: str) -> str:
         return f"{BELIEF}/{label}"
 
-    def believed(self, state: SceneState, label: str) -> Ghost | None:
+    @staticmethod
+    def believed(state: SceneState, label: str) -> Ghost | None:
         """Where the world model has ``label`` (centre, rotation, size), or None: no such
         element (or several), or no pose or size."""
         ids = state.ids_with_label(label)

@@ -117,7 +117,7 @@ class MissionRecording:
         self.call_text = call_text or (lambda _agent, skill, p: step_text(skill, p, label_of))
         self.robots = dict(robots or {})
         self._t0 = time.monotonic()
-        self._steps: dict[int, str] = {}
+        self._steps: dict[tuple[str, int], str] = {}
         self.beliefs: BeliefLayer | None = None
         self._state: Callable[[], SceneState] | None = None
         self.agents = AgentEventLines(
@@ -173,12 +173,12 @@ class MissionRecording:
             case Planned():
                 text = self._planned(event)
             case StepStarted():
-                self._steps[event.step] = event.skill
+                self._steps[(event.task_id, event.step)] = event.skill
                 call = self.call_text(event.agent, event.skill, event.params)
                 text = f"{event.agent}: step {event.step} {call} started"
                 self._skill(event.agent, f"step {event.step} {call} started", 0.0)
             case StepProgress():
-                skill = self._steps.get(event.step, "")
+                skill = self._steps.get((event.task_id, event.step), "")
                 message = f"step {event.step} {skill} [{event.state}] {event.message}".rstrip()
                 self._skill(event.agent, message, event.fraction if event.fraction >= 0 else None)
                 return  # progress goes to the robot's timeline only

@@ -5,8 +5,9 @@ import here): the camera framing the robots and the work (:func:`frame` of
 :func:`scene_points`), a label per robot (on its base) and per object (over it), and each
 robot's arm colour. :func:`record_scene` logs the labels into the world's
 recording (static, ``world/<body>/label``: they ride on the bodies) and sends the default
-layout (:func:`blueprint`) made from them; ``skimesh demo`` and ``skimesh sim --rerun`` call
-it once the world is built.
+layout (:func:`blueprint`) made from them (:func:`send_layout`); ``skimesh demo`` and
+``skimesh sim --rerun`` call it once the world is built, ``skimesh monitor`` calls
+:func:`send_layout` with the layout of its mirrored world.
 """
 
 from __future__ import annotations
@@ -20,11 +21,19 @@ import numpy as np
 import rerun as rr
 
 from mujoco_sim import SimWorld
+from scenario import Scenario
 
 from ._blueprint import WORLD, blueprint
 from ._framing import Eye, frame, geom_corners, scene_points
 
-__all__ = ["Label", "SceneLayout", "record_scene", "scene_cameras", "scene_layout"]
+__all__ = [
+    "Label",
+    "SceneLayout",
+    "record_scene",
+    "scene_cameras",
+    "scene_layout",
+    "send_layout",
+]
 
 _ABOVE = 0.03  # m: a label's gap above the top of what it names
 _CAPSULE = 3  # mujoco.mjtGeom.mjGEOM_CAPSULE
@@ -103,14 +112,45 @@ def scene_layout(
     return SceneLayout(eye=eye, labels=labels, colors=colors)
 
 
-def scene_cameras(world: SimWorld) -> list[str]:
-    """The world's cameras, as the recorder names their images (``<mount>/<site>`` or the
+def scene_cameras(scenario: Scenario) -> list[str]:
+    """The scenario's cameras, as the recorder names their images (``<mount>/<site>`` or the
     camera's label)."""
     return [
         f"{c.mount}/{c.site}" if c.mount else c.label
-        for c in world.scenario.sensors
+        for c in scenario.sensors
         if c.kind == "camera"
     ]
+
+
+def send_layout(
+    rec: rr.RecordingStream,
+    layout: SceneLayout,
+    *,
+    robots: Sequence[str] = (),
+    cameras: Sequence[str] = (),
+    mission: bool = True,
+) -> None:
+    """Log ``layout``'s labels into ``rec`` (static, riding on their bodies) and send the
+    default layout framed on it (``robots``: the names of the progress lines, ``cameras``:
+    the image views; see :func:`blueprint`)."""
+    rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # the 3-D view's origin
+    for label in layout.labels:
+        rec.log(
+            label.entity,
+            rr.Points3D(
+                [[0.0, 0.0, label.height]],
+                radii=[0.004],
+                colors=[_LABEL_COLOR],
+                labels=[label.text],
+                show_labels=True,
+            ),
+            static=True,
+        )
+    rec.send_blueprint(
+        blueprint(
+            robots=robots, colors=layout.colors, eye=layout.eye, cameras=cameras, mission=mission
+        )
+    )
 
 
 async def record_scene(
@@ -132,26 +172,6 @@ async def record_scene(
             objects=list(world.facts.objects),
         )
     )
-    rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # the 3-D view's origin
-    for label in layout.labels:
-        rec.log(
-            label.entity,
-            rr.Points3D(
-                [[0.0, 0.0, label.height]],
-                radii=[0.004],
-                colors=[_LABEL_COLOR],
-                labels=[label.text],
-                show_labels=True,
-            ),
-            static=True,
-        )
-    rec.send_blueprint(
-        blueprint(
-            robots=robots,
-            colors=layout.colors,
-            eye=layout.eye,
-            cameras=scene_cameras(world) if images else (),
-            mission=mission,
-        )
-    )
+    cameras = scene_cameras(scenario) if images else ()
+    send_layout(rec, layout, robots=robots, cameras=cameras, mission=mission)
     return layout

@@ -5,7 +5,7 @@
     sim  10.77.42.2   skimesh sim --scenario kitting --fast (the MuJoCo world, its devices)
     r1   10.77.42.3   skimesh agent --scenario kitting --robot r1 (devices over Zenoh)
     r2   10.77.42.4   skimesh agent --scenario kitting --robot r2
-    ops  10.77.42.5   skimesh task-agent, the CLI (task submit, wm sparql)
+    ops  10.77.42.5   skimesh task-agent, skimesh monitor, the CLI (task submit, wm sparql)
 
 Every process is a Zenoh client of the router over the lab's bridge (tests/integration/netns.py;
 no packet leaves the namespaces), with the shipped Zenoh files unchanged.
@@ -15,7 +15,9 @@ the simulated devices served from another host, and succeeds; the goal holds in 
 model (read back by ``skimesh wm sparql`` from the operations host) and in the physics: the
 grippers hold nothing (read over Zenoh) and, in the last poses of the simulator's own
 recording, every part lies at rest in its kit box (``object_in``, the ground truth the demo's
-check uses). The network itself (a link cut mid-task) is tests/integration/test_netns.py's.
+check uses); ``skimesh monitor`` on the operations host records the demo's kinds of entities
+(the world, labels, ghosts, joints, steps, task events, the plan, changes, agents' logs). The
+network itself (a link cut mid-task) is tests/integration/test_netns.py's.
 """
 
 from __future__ import annotations
@@ -88,6 +90,19 @@ anyio.run(main, *sys.argv[1:])
 '''
 
 
+MONITORED = {
+    "/world/r1.base", "/world/Gear-1", "/world/Gear-1/label", "/belief/Gear-1",
+    "/robots/r1/joints", "/robots/r1/skill", "/robots/r2/progress", "/task/events",
+    "/task/plan", "/task/plan/graph", "/world_model/changes", "/agents/r1/events",
+}  # fmt: skip
+"""What ``skimesh monitor`` on the operations host records: the demo's kinds of entities."""
+
+
+def monitored(rrd: Path) -> set[str]:
+    """The entities of ``rrd`` with data (poses over time, lines, the plan)."""
+    return {str(chunk.entity_path) for chunk in rerun.chunk.RrdReader(rrd).stream()}
+
+
 def cli(site: Site, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
     """``skimesh ARGS`` on the operations host, to its end."""
     return site.lab.run("ops", "-m", "skimesh", *args, timeout=timeout)
@@ -119,6 +134,9 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Site]:
             for robot in ("r1", "r2"):
                 s.children[robot].wait_stderr(f"agent {robot} ready", timeout=120)
             s.children["task agent"].wait_stderr("task agent ready", timeout=90)
+            monitor = ["monitor", *s.flags(), "--scenario", "kitting"]
+            s.skimesh("monitor", "ops", *monitor, "--rrd", str(folder / "monitor.rrd"))
+            s.children["monitor"].wait_stderr("monitor ready", timeout=120)
             yield s
         finally:
             codes = {name: child.stop() for name, child in reversed(s.children.items())}
@@ -217,6 +235,11 @@ def test_the_demo_split_across_namespaces_reaches_its_goal_in_wm_and_physics(
     assert grippers.returncode == 0, grippers.stderr
     held = json.loads(grippers.stdout)
     assert held == {"r1": "", "r2": ""}, f"a gripper still holds something: {held}"
+
+    monitor = site.children.pop("monitor")
+    assert monitor.stop() == 0, monitor.log()  # its recording finished
+    missing = MONITORED - monitored(site.folder / "monitor.rrd")
+    assert not missing, f"the monitor's recording lacks {sorted(missing)}"
 
     sim = site.children["sim"]
     assert sim.stop() == 0, sim.log()  # SIGTERM: the recording is flushed and closed
