@@ -192,6 +192,11 @@ class KeySpace:
         """Queryable of the task service."""
         return f"{self.prefix}/tasks/rpc"
 
+    def tasks_query(self) -> str:
+        """Read-only queryable of the task service (status, list, history, verify), so an
+        ACL can let monitors and viewers read tasks without letting them submit or abort."""
+        return f"{self.prefix}/tasks/query"
+
     def operator_rpc(self) -> str:
         """Queryable of the operator desk (pending requests a person answers)."""
         return f"{self.prefix}/operator/rpc"

@@ -48,6 +48,7 @@ from ._errors import (
 )
 from ._goals import Goal
 from .protocol import (
+    READ_REQUESTS,
     AbortTask,
     AnswerPending,
     HistoryReply,
@@ -144,8 +145,11 @@ class TaskClient:
     # ------------------------------------------------------------------ requests
 
     async def request(self, request: TaskRequest, *, timeout: float | None = None) -> TaskReply:
-        """One request to ``tasks/rpc``; an error reply raises (see the module doc)."""
-        key, wait = self.mesh.keys.tasks_rpc(), timeout or self.timeout
+        """One request to ``tasks/rpc`` (a read: to the read-only ``tasks/query``, which an ACL
+        may open to more users); an error reply raises (see the module doc)."""
+        keys = self.mesh.keys
+        key = keys.tasks_query() if isinstance(request, READ_REQUESTS) else keys.tasks_rpc()
+        wait = timeout or self.timeout
         try:
             data = await self.mesh.request(key, encode(request), timeout=wait)
         except RemoteError as e:
@@ -240,7 +244,10 @@ class TaskClient:
         ``existing``: the task was submitted already (its status is checked at once; an ended
         task yields only a ``TaskFinished`` rebuilt from its status). Enter with
         ``existing=False`` *before* submitting to miss no event."""
-        async with self.mesh.subscribe(self.mesh.keys.task_events(task_id)) as samples:
+        keys = self.mesh.keys  # through one subscriber for every task: no router entry per task
+        async with self.mesh.subscribe(
+            keys.task_events(task_id), via=keys.tasks_events()
+        ) as samples:
             events = self._events(task_id, samples, deadline, existing)
             try:
                 yield events

@@ -25,6 +25,7 @@ from wm_store.protocol import Value
 from ._goals import Goal
 
 __all__ = [
+    "READ_REQUESTS",
     "SCHEMA_VERSION",
     "AbortTask",
     "AnswerPending",
@@ -232,6 +233,9 @@ TaskRequest: TypeAlias = (
     | PauseTask
     | ResumeTask
 )
+
+#: The requests that read only: answered on ``tasks/query`` as well as on ``tasks/rpc``.
+READ_REQUESTS = (VerifyFile, TaskStatus, ListTasks, TaskHistory)
 
 # --------------------------------------------------------------------------- events
 

@@ -83,6 +83,7 @@ from .execution import (
 )
 from .operator import serve_operator
 from .protocol import (
+    READ_REQUESTS,
     AbortTask,
     GoalCheck,
     HistoryReply,
@@ -202,6 +203,14 @@ class TaskService:
         )
         """``tasks/rpc``: bytes -> :meth:`handle` -> bytes (:meth:`RequestHandler.serve_on
         <meshlink.rpc.RequestHandler.serve_on>` serves it)."""
+        self.query: RequestHandler[TaskRequest, TaskReply] = RequestHandler(
+            TaskRequest,
+            self._handle_read,
+            errors=_to_reply,
+            max_request_bytes=max_request_bytes,
+            name="tasks/query",
+        )
+        """``tasks/query``: the read-only requests (:data:`READ_REQUESTS`); others refused."""
 
     async def run(self, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED) -> None:
         """Host the tasks until cancelled; cancelling aborts every running task (their runs
@@ -266,6 +275,14 @@ class TaskService:
             case ResumeTask(task_id=task_id):
                 return await self._resume(task_id)
         raise RequestError(BAD_REQUEST, f"unsupported request {type(request).__name__}")
+
+    async def _handle_read(self, request: TaskRequest) -> TaskReply:
+        if not isinstance(request, READ_REQUESTS):
+            raise RequestError(
+                "read_only",
+                f"tasks/query is read-only: send {type(request).__name__} to tasks/rpc",
+            )
+        return await self.handle(request)
 
     # ------------------------------------------------------------------ registry
 
@@ -405,6 +422,7 @@ async def serve_tasks(
             )
         await tg.start(service.run)
         await tg.start(mesh.serve, keys.tasks_rpc(), service.rpc.serve_on(keys.tasks_rpc()))
+        await tg.start(mesh.serve, keys.tasks_query(), service.query.serve_on(keys.tasks_query()))
         _log.info(
             "task agent ready on mesh %r: %d agents available (%s)%s",
             keys.mesh,

@@ -290,7 +290,10 @@ class AgentClient:
             feed = self._feed
             if feed is None:
                 key = self.mesh.keys.run_progress(self.agent, run_id)
-                feed = await stack.enter_async_context(RunFeed.open(self.mesh, self.agent, key))
+                every = self.mesh.keys.runs_progress(self.agent)  # one router entry per agent
+                feed = await stack.enter_async_context(
+                    RunFeed.open(self.mesh, self.agent, key, via=every)
+                )
             with feed.register(run_id) as inbox:
                 events = follow_run(self, run_id, inbox)
                 try:

@@ -41,12 +41,15 @@ class RunFeed:
 
     @classmethod
     @asynccontextmanager
-    async def open(cls, mesh: Mesh, agent: str, key: str) -> AsyncIterator[RunFeed]:
-        """Subscribe to ``key`` (one run's or every run's progress) and watch ``agent``."""
+    async def open(
+        cls, mesh: Mesh, agent: str, key: str, *, via: str | None = None
+    ) -> AsyncIterator[RunFeed]:
+        """Subscribe to ``key`` (one run's or every run's progress; ``via``: through a shared
+        subscriber on that wildcard, see ``Mesh.subscribe``) and watch ``agent``."""
         feed = cls()
         try:
             async with (
-                mesh.subscribe(key) as samples,
+                mesh.subscribe(key, via=via) as samples,
                 mesh.watch_liveliness(mesh.keys.agent(agent)) as presence,
                 anyio.create_task_group() as tg,
             ):

@@ -180,12 +180,7 @@ async def _probe_all(plan: Plan) -> list[tuple[str, str]]:
     config = MeshConfig(connect=plan.connect, mesh=plan.site.mesh, config_file=plan.probe_config)
     try:
         async with open_mesh(config) as mesh:
-            return [
-                (c.name, "skipped (no `skimesh monitor` yet)" if c.kind == "monitor" else "")
-                if c.kind == "monitor"
-                else (c.name, await probe(c, mesh))
-                for c in plan.components
-            ]
+            return [(c.name, await probe(c, mesh)) for c in plan.components]
     except MeshlinkError as e:
         print(f"skimesh status: no mesh session: {e}", file=sys.stderr)
         return [(c.name, "not probed: no mesh session") for c in plan.components]

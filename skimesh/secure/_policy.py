@@ -23,7 +23,8 @@ viewer     nothing more: read-only (also the monitor)
 
 Everyone may: subscribe to world-model changes, run progress, agents' event logs, task events,
 device states and progress; watch agents' liveliness; query ``wm/query``, ``wm/elements/**``,
-``agents/*/skills``, ``eventlog/rpc``, ``sim/truth``.
+``agents/*/skills``, ``eventlog/rpc``, ``sim/truth``, ``tasks/query`` (task status, list and
+history; submitting and aborting stay on ``tasks/rpc``).
 """
 
 from __future__ import annotations
@@ -56,6 +57,7 @@ _READ_QUERIES = [
     "skimesh/*/agents/*/skills",
     "skimesh/*/eventlog/rpc",
     "skimesh/*/sim/truth",
+    "skimesh/*/tasks/query",
 ]
 _SERVE = ["declare_queryable", "reply", "put"]
 _WATCH = ["declare_liveliness_subscriber", "liveliness_query"]
@@ -122,6 +124,7 @@ def _own_rules(c: Component) -> list[dict[str, Any]]:
         case "task-agent":
             serve = [
                 "skimesh/*/tasks/rpc",
+                "skimesh/*/tasks/query",
                 "skimesh/*/tasks/*/events",
                 "skimesh/*/agents/operator",
                 "skimesh/*/agents/operator/**",

@@ -39,7 +39,8 @@ class Component:
     """Its ``skimesh`` sub-command and options (run as ``python -m skimesh ARGV``)."""
     ready: tuple[str, ...]
     """Its probe: ``("tcp", address, port)``, ``("store",)``, ``("devices",)``,
-    ``("agents", name, ...)``, ``("tasks",)`` or ``()`` (no probe: the monitor)."""
+    ``("agents", name, ...)``, ``("tasks",)``, ``("eventlog",)`` or ``()`` (no probe: the
+    monitor, ready once it runs)."""
     serves: tuple[tuple[str, str], ...] = ()
     """An agents process: (agent, its robot's label) of each agent it serves."""
 
@@ -233,9 +234,7 @@ class _Planner:
         out += self.agents()
         out += self.task_agent()
         out += self.eventlog()
-        if self.site.monitor is not None:
-            where = self.host_of("the monitor", self.site.monitor.host)
-            out.append(Component(self.name("", "monitor"), "monitor", where, (), ()))
+        out += self.monitor()
         connect = (self.endpoint_for(self.me),)
         return Plan(self.site, self.path, self.me, tuple(out), connect, self.security)
 
@@ -360,6 +359,20 @@ class _Planner:
         argv = ["task-agent", *self.client(host, name)]
         argv += ["--operator", task.operator] if task.operator else []
         return [Component(name, "task-agent", host, tuple(argv), ("tasks",))]
+
+    def monitor(self) -> list[Component]:
+        monitor = self.site.monitor
+        if monitor is None:
+            return []
+        host, name = self.host_of("the monitor", monitor.host), self.name("", "monitor")
+        argv = [
+            "monitor",
+            *self.client(host, name),
+            "--scenario",
+            self.need_scenario("the monitor"),
+        ]
+        argv += ["--rrd", monitor.rrd] + (["--serve-web"] if monitor.serve_web else [])
+        return [Component(name, "monitor", host, tuple(argv), ())]
 
     def eventlog(self) -> list[Component]:
         log = self.site.eventlog

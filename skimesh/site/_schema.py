@@ -151,16 +151,18 @@ class TaskAgent(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
 
 
 class Monitor(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
-    """A site monitor. `skimesh monitor` is not part of skimesh yet: `skimesh up` accepts
-    this table and says that it skips it.
+    """A site monitor (`skimesh monitor`): the whole mesh recorded to rerun with the demo's
+    layout, the world posed from the devices' states.
 
     Attributes:
-        host: The host that would run it (may be left out on a one-host site).
-        rrd: The recording it would write, relative to the state directory.
+        host: The host that runs it (may be left out on a one-host site).
+        rrd: The recording it writes, relative to the state directory of its host.
+        serve_web: Also serve rerun's web viewer from that host (port 9090).
     """
 
     host: str = ""
     rrd: str = "monitor.rrd"
+    serve_web: bool = False
 
 
 class EventLog(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
@@ -215,7 +217,7 @@ class Site(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
         sim: The simulator (leave out on real hardware).
         agents: The skill-agent processes.
         task_agent: The task agent (leave out for a site without one).
-        monitor: A monitor (accepted and skipped: `skimesh monitor` does not exist yet).
+        monitor: A monitor (`skimesh monitor`).
         eventlog: The site event log (`skimesh eventlog`).
         restart: The restart policy of every process.
         zenoh_config: A Zenoh JSON5 file for every process but the routers (`--config`),

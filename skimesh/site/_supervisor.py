@@ -122,9 +122,6 @@ class Supervisor:
         site = self.plan.site
         for proc in self.procs:
             c, row = proc.component, proc.row
-            if c.kind == "monitor":
-                self._set(row, "skipped", "`skimesh monitor` is not part of skimesh yet")
-                continue
             if c.kind != "router" and self._mesh is None:
                 try:
                     self._mesh = await stack.enter_async_context(open_mesh(self._mesh_config()))

@@ -68,12 +68,20 @@ async def test_heating_is_refused_with_the_door_open(world: SimWorld) -> None:
 async def test_heating_counts_down_in_simulated_time(world: SimWorld) -> None:
     oven = microwave(world)
     started = world.snapshot.time
+    ended: list[float] = []
+
+    async def heat() -> None:
+        await oven.heat(4.0)
+        ended.append(world.snapshot.time)
+
     async with anyio.create_task_group() as tg:
-        tg.start_soon(oven.heat, 4.0)
+        tg.start_soon(heat)
         await world.sleep(1.0)
         state = await oven.state()
         assert state.heating and 2.5 < state.remaining < 3.1
-    assert 4.0 <= world.snapshot.time - started <= 4.25  # batches of 0.1 s
+    # at least the 4 s asked for; the world goes on beside the test, so a loaded machine may
+    # read the clock a little later than the heater stopped
+    assert 4.0 <= ended[0] - started <= 5.0
     assert not (await oven.state()).heating
 
 

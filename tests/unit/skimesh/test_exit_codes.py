@@ -81,6 +81,7 @@ def test_the_table_is_the_documented_one() -> None:
         "UNREACHABLE": 3,
         "ABORTED": 4,
         "CONTRADICTED": 5,
+        "PARTIAL": 6,
         "INTERRUPTED": 130,
     }
 

@@ -65,7 +65,7 @@ def test_every_shipped_site_plans_for_each_of_its_hosts(path: Path) -> None:
         plan = make_plan(site, path, host)
         kinds = [c.kind for c in plan.components]
         assert kinds[0] == "router"
-        order = ["router", "store", "sim", "agents", "task-agent", "eventlog"]
+        order = ["router", "store", "sim", "agents", "task-agent", "eventlog", "monitor"]
         assert kinds == sorted(kinds, key=order.index)
 
 
@@ -144,10 +144,12 @@ def test_listen_replaces_the_only_routers_endpoints(tmp_path: Path) -> None:
     assert plan.components[0].argv == ("router", "--listen", "tcp/127.0.0.1:7123")
 
 
-def test_the_monitor_is_planned_without_a_process(tmp_path: Path) -> None:
-    plan = _plan(tmp_path, '[[routers]]\nlisten = ["tcp/127.0.0.1:7000"]\n[monitor]\n')
-    assert plan.components[-1].kind == "monitor"
-    assert plan.components[-1].argv == ()
+def test_the_monitor_records_the_sites_scenario(tmp_path: Path) -> None:
+    text = 'scenario = "kitting"\n[[routers]]\nlisten = ["tcp/127.0.0.1:7000"]\n[monitor]\n'
+    monitor = _plan(tmp_path, text).components[-1]
+    assert monitor.kind == "monitor" and monitor.ready == ()
+    assert monitor.argv[0] == "monitor" and "--rrd" in monitor.argv
+    assert monitor.argv[monitor.argv.index("--scenario") + 1] == "kitting"
 
 
 def test_restart_policy_backs_off_and_gives_up_after_max_restarts_in_the_window() -> None:

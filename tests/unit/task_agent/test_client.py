@@ -119,7 +119,7 @@ class HistoryMesh:
         return encode(TasksReply(tasks=[TaskInfo(task_id="t", outcome="running")]))
 
     @asynccontextmanager
-    async def subscribe(self, key: str) -> AsyncIterator[Any]:
+    async def subscribe(self, key: str, *, via: str | None = None) -> AsyncIterator[Any]:
         yield self.receive
 
     def live(self, *events: TaskEvent) -> None:
