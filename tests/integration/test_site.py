@@ -195,13 +195,15 @@ def test_each_shipped_one_host_site_comes_up_with_its_simulator(tmp_path: Path, 
                 os.kill(pid, 9)
 
 
-def test_a_process_that_ends_before_it_is_ready_fails_the_bring_up(tmp_path: Path) -> None:
+def test_a_process_that_ends_before_it_is_ready_fails_the_bring_up(
+    tmp_path: Path, mesh_name: str
+) -> None:
     """A store that cannot start (its ontology file is no Turtle): `skimesh up` exits 1 naming
     it and its log, and stops the router it started."""
     (tmp_path / "bad.ttl").write_text("this is not turtle .\n", encoding="utf-8")
     site = tmp_path / "site.toml"
     site.write_text(
-        f'[[routers]]\nlisten = ["tcp/127.0.0.1:{free_port()}"]\n'
+        f'mesh = "{mesh_name}"\n[[routers]]\nlisten = ["tcp/127.0.0.1:{free_port()}"]\n'
         '[store]\nontology = ["bad.ttl"]\n[task_agent]\n',
         encoding="utf-8",
     )
