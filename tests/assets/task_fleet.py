@@ -5,8 +5,9 @@ by hand, and a :class:`CoreRunner`. No Zenoh.
 
 Scene (element ids in :class:`Fleet` fields)::
 
-    depot (Location)          robots r1..rN at the depot (or where ``start`` says)
-    Station-1, Station-2      each: a PartBox (at the station) with gears, a Tray (at it)
+    depot (Location)          robots r1..rN at the depot (or where ``start`` says); open floor
+    Station-1, Station-2      each: a PartBox (at the station) with gears, a Tray (at it);
+                              room for two robots (``robotCapacity``)
     robot-i contain KitBox-i  each robot carries its kit box
 
 Goals that need both robots: fill each robot's kit (``kit_goal``); goals either robot can
@@ -101,12 +102,20 @@ def _pose(x: float, y: float) -> dict[str, Value]:
 
 async def _scene(wm: WmClient, parts: int) -> dict[str, list[str]]:
     ops: list[Op] = [
-        AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0, 0))
+        AddElement(
+            type="Location",
+            label="depot",
+            ref="$depot",
+            properties={**_pose(0, 0), "robotCapacity": 0},
+        )
     ]
     for s in (1, 2):
         ops += [
             AddElement(
-                type="Station", label=f"station-{s}", ref=f"$s{s}", properties=_pose(2, 2 * s)
+                type="Station",
+                label=f"station-{s}",
+                ref=f"$s{s}",
+                properties={**_pose(2, 2 * s), "robotCapacity": 2},
             ),
             AddElement(
                 type="PartBox",

@@ -202,7 +202,15 @@ def kitting_scene(
     onto = ontology or Ontology.default()
     state = SceneState()
     state.set_spatial_predicates(n for n, r in onto.relations.items() if r.spatial)
-    ops: list[Op] = [AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0))]
+    # the depot is open floor: every robot waits there (no limit on robots)
+    ops: list[Op] = [
+        AddElement(
+            type="Location",
+            label="depot",
+            ref="$depot",
+            properties={**_pose(0), "robotCapacity": 0},
+        )
+    ]
     for s in range(stations):
         ops.append(
             AddElement(
