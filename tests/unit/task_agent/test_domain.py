@@ -94,7 +94,14 @@ def test_types_objects_and_initial_facts(kitting: tuple[KittingScene, PlanningTa
     assert task.objects["KitBox-1"] == task.objects["PartBox-1"] == "Container"
     assert task.objects["Station-1"] == task.objects[scene.depot] == "Location"
     assert "Skill-1" not in task.objects
-    assert set(task.predicates) == {"contain", "at", "has_pose", "is_Appliance", "free_spot", "spot"}
+    assert set(task.predicates) == {
+        "contain",
+        "at",
+        "has_pose",
+        "is_Appliance",
+        "free_spot",
+        "spot",
+    }
     assert task.predicates["is_Appliance"].static
     assert not any(f[0] == "is_Appliance" for f in task.init)
     assert ("has_pose", ("Station-1",)) in task.init
