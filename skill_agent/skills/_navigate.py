@@ -6,6 +6,13 @@ report is written to the world model: the robot's pose (observed, source = the b
 everything the robot carries (a kit box and the parts in it: its spatial descendants with a
 world-frame pose) is moved by the same rigid motion, so the world model's geometry follows
 the robot. A stop (or timeout) halts the base and records where it stopped.
+
+Room for robots (``skill_agent/skills/_spots.py``): before the base moves, the robot reserves
+a place at the goal in the world model (compare-and-set on the goal's revision); while the
+goal is full it waits, up to ``wait_for_room`` seconds, for a robot to leave, and then fails
+naming who is there. Once the base has arrived, the robot gives back every other place it
+held (its start); when the drive fails or is stopped, it gives back the goal unless the base
+stopped within :data:`NEAR_GOAL` of it (it then stands in the way there).
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from skill_agent.primitives._supervise import halt
 from skill_agent.primitives.poses import to_wm_pose, yaw_of
 from skill_agent.protocol._skills import HasPropertyCond, ParamSpec, SkillDescription
 from skill_agent.skills._params import BASE, ROBOT, at, offline
+from skill_agent.skills._spots import release, reserve
 from skill_agent.skills._support import (
     carried_ops,
     device,
@@ -35,12 +43,14 @@ from wm_store.ontology import Prop
 from wm_store.protocol import Observe, Op, UpdateElement
 from wm_store.reasoners import Transform, quat_from_yaw
 
-__all__ = ["POSITION_TOLERANCE", "YAW_TOLERANCE", "Navigate", "follow_ops"]
+__all__ = ["NEAR_GOAL", "POSITION_TOLERANCE", "YAW_TOLERANCE", "Navigate", "follow_ops"]
 
 POSITION_TOLERANCE = 0.05
 """How far (m) from the goal pose the base may stop and still count as there."""
 YAW_TOLERANCE = 0.1
 """Heading error (rad) allowed at the goal."""
+NEAR_GOAL = 0.6
+"""A base stopped within this distance (m) of the goal keeps its reservation there."""
 
 
 def _pose2d(t: Transform) -> Pose2D:
@@ -81,6 +91,12 @@ class Navigate(Skill):
                 name="goal", type="Location", doc="where it goes (its pose: the parking pose)"
             ),
             offline("speed", "float", 0.5, "driving speed, m/s"),
+            offline(
+                "wait_for_room",
+                "float",
+                120.0,
+                "how long to wait for room at the goal while other robots are there, s",
+            ),
         ],
         pre=[
             at("robot", "start"),
@@ -100,6 +116,12 @@ class Navigate(Skill):
             raise SkillFailure(f"navigate: the world model has no pose of {goal}")
         base = device(ctx, "base", MobileBase)  # type: ignore[type-abstract]
         target = _pose2d(where)
+        robot = element_id(ctx, "robot")
+
+        async def waiting(message: str) -> None:
+            await ctx.progress(message, step="wait for room")
+
+        await reserve(wm, robot, goal, wait=float_param(ctx, "wait_for_room"), waiting=waiting)
         try:
             await tracked(
                 ctx,
@@ -108,8 +130,20 @@ class Navigate(Skill):
                 step="drive",
             )
         except MotionError as exc:
-            await self._record(ctx)
+            await self._give_back(ctx, await self._record(ctx))
             raise failure("navigate", exc) from exc
+        await release(wm, robot, keep=goal)  # it has left its start
+
+    async def _give_back(self, ctx: SkillContext, reached: Pose2D) -> None:
+        """After a failed or stopped drive: release the goal unless the base stands near it."""
+        wm = wm_of(ctx)
+        goal = element_id(ctx, "goal")
+        where = world_transform(wm, goal)
+        if where is not None:
+            target = _pose2d(where)
+            if math.hypot(reached.x - target.x, reached.y - target.y) <= NEAR_GOAL:
+                return
+        await release(wm, element_id(ctx, "robot"), only=goal)
 
     async def post_sense(self, ctx: SkillContext) -> None:
         reached = await self._record(ctx)
@@ -126,7 +160,7 @@ class Navigate(Skill):
     async def on_preempt(self, ctx: SkillContext) -> None:
         base = device(ctx, "base", MobileBase)  # type: ignore[type-abstract]
         await halt(base)
-        await self._record(ctx)
+        await self._give_back(ctx, await self._record(ctx))
 
     async def _record(self, ctx: SkillContext) -> Pose2D:
         """Write where the base stands now (robot pose and what it carries)."""
