@@ -5,6 +5,11 @@ and keeps ``available`` on the Agent element labelled ``<name>`` equal to "its t
 A registration that arrives before the token (or a token that outlives a crashed registration)
 is reconciled as soon as either side changes, so the flag never stays wrong.
 
+When an agent is lost, the places its robot reserved for driving (``reservedBy`` on locations,
+written by the navigate skill) are released in the same transaction, unless another live agent
+controls the robot too: a lost robot no longer claims where it was going. Where it stands still
+counts (its ``at`` stays), so no other robot is planned or driven into it.
+
 Liveliness is only as good as the router: if the router dies, every token disappears and all
 agents turn unavailable; they come back by themselves when the router does.
 """
@@ -19,7 +24,8 @@ from anyio.abc import TaskStatus
 
 from meshlink import Mesh
 from wm_store._errors import WmError
-from wm_store.protocol import Change, ElementPut, Transact, UpdateElement
+from wm_store.ontology import Cls, Prop, Rel
+from wm_store.protocol import Change, ElementPut, Op, Transact, UpdateElement
 from wm_store.server._store import WmStore
 
 __all__ = ["AVAILABLE", "PresenceMonitor"]
@@ -86,11 +92,45 @@ class PresenceMonitor:
         want = name in self.alive
         state = self.store.state
         agents = [state.elements[i] for i in sorted(state.ids_with_label(name))]
-        ops = [
+        ops: list[Op] = [
             UpdateElement(id=e.id, properties={AVAILABLE: want}, expect_rev=e.rev)
             for e in agents
             if self._is_agent(e.type) and e.properties.get(AVAILABLE) is not want
         ]
         if ops:
             _log.info("agent %s is %s", name, "available" if want else "unavailable")
+        if not want:
+            ops += self._release_ops([e.id for e in agents if self._is_agent(e.type)])
+        if ops:
             await self.store.transact(Transact(ops=list(ops), author="presence"))
+
+    def _release_ops(self, agents: list[str]) -> list[Op]:
+        """Ops removing the robots of the lost ``agents`` from every location's
+        ``reservedBy``, but robots another live agent controls."""
+        state = self.store.state
+        robots = set()
+        for agent in agents:
+            for robot in state.objects(agent, Rel.controls):
+                others = state.subjects(robot, Rel.controls) - set(agents)
+                if not any(self._alive_agent(a) for a in others):
+                    robots.add(robot)
+        if not robots:
+            return []
+        ops: list[Op] = []
+        places = state.ids_of_types(self.store.ontology.subclasses(Cls.Location))
+        for place in sorted(places):
+            element = state.elements[place]
+            held = element.properties.get(Prop.reservedBy)
+            if isinstance(held, list) and robots & set(held):
+                _log.info("released %s at %s (agent lost)", sorted(robots & set(held)), place)
+                rest = [r for r in held if r not in robots]
+                ops.append(
+                    UpdateElement(
+                        id=place, properties={Prop.reservedBy: rest}, expect_rev=element.rev
+                    )
+                )
+        return ops
+
+    def _alive_agent(self, agent_id: str) -> bool:
+        element = self.store.state.elements.get(agent_id)
+        return element is not None and element.label in self.alive
