@@ -20,11 +20,12 @@ from collections.abc import Awaitable, Callable
 import anyio
 
 from skill_agent._errors import SkillFailure
+from skill_agent._skill import WorldView
 from wm_store import ConflictError, WmClient, display_name
 from wm_store.ontology import Cls, Prop, Rel
 from wm_store.protocol import Change, Element, UpdateElement, Value
 
-__all__ = ["capacity", "holders", "release", "reserve", "reserved_by"]
+__all__ = ["holders", "release", "reserve", "reserved_by", "robot_capacity"]
 
 
 def reserved_by(element: Element) -> list[str]:
@@ -33,11 +34,11 @@ def reserved_by(element: Element) -> list[str]:
     return [v for v in value if isinstance(v, str)] if isinstance(value, list) else []
 
 
-def capacity(wm: WmClient, place: str) -> int | None:
+def robot_capacity(view: WorldView, place: str) -> int | None:
     """How many robots ``place`` holds: its ``robotCapacity`` (absent: 1); None: no limit, or
     not a location."""
-    element = wm.find_element(place)
-    if element is None or not wm.ontology.is_a(element.type, Cls.Location):
+    element = view.find_element(place)
+    if element is None or not view.ontology.is_a(element.type, Cls.Location):
         return None
     cap = element.properties.get(Prop.robotCapacity)
     if cap is None:
@@ -45,15 +46,16 @@ def capacity(wm: WmClient, place: str) -> int | None:
     return int(cap) if isinstance(cap, int | float) and cap > 0 else None
 
 
-def holders(wm: WmClient, place: str) -> set[str]:
+def holders(view: WorldView, place: str) -> set[str]:
     """The robots taking room at ``place``: reservations and robots standing there."""
-    element = wm.find_element(place)
+    element = view.find_element(place)
     if element is None:
         return set()
     standing = {
         rel.subject
-        for rel in wm.query_relation(predicate=Rel.at, obj=place)
-        if (e := wm.find_element(rel.subject)) is not None and wm.ontology.is_a(e.type, Cls.Robot)
+        for rel in view.query_relation(predicate=Rel.at, obj=place)
+        if (e := view.find_element(rel.subject)) is not None
+        and view.ontology.is_a(e.type, Cls.Robot)
     }
     return set(reserved_by(element)) | standing
 
@@ -92,7 +94,7 @@ async def reserve(
     deadline = time.monotonic() + wait
     told = False
     while True:
-        cap = capacity(wm, place)
+        cap = robot_capacity(wm, place)
         element = wm.find_element(place)
         if cap is None or element is None:
             return False

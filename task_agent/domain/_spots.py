@@ -24,7 +24,8 @@ from collections.abc import Iterable
 import msgspec
 
 from skill_agent import WorldView
-from wm_store.ontology import Cls, Prop, Rel
+from skill_agent.skills import robot_capacity
+from wm_store.ontology import Cls, Rel
 
 from ._model import ActionSchema, GroundFact, Lit
 from ._vocabulary import Vocabulary
@@ -40,11 +41,7 @@ places)."""
 
 def holds_one_robot(view: WorldView, location: str) -> bool:
     """The location holds one robot at a time (its ``robotCapacity`` is 1 or absent)."""
-    element = view.find_element(location)
-    if element is None or not view.ontology.is_a(element.type, Cls.Location):
-        return False
-    cap = element.properties.get(Prop.robotCapacity)
-    return cap is None or cap == 1
+    return robot_capacity(view, location) == 1
 
 
 def _moves(schema: ActionSchema, robot: str) -> tuple[list[str], list[str]]:
