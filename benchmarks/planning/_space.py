@@ -1,5 +1,6 @@
-"""Shared space: planning with robots counted at the stations beside the same scene with no
-limit on robots anywhere (every station ``robotCapacity`` 0), solved alternately in one run.
+"""Shared space: planning with robots counted at the stations beside the same scene with room
+for every robot everywhere (every station's ``robotCapacity`` the number of robots: nothing is
+counted), solved alternately in one run.
 
 In the kitting scene each of the two stations holds one robot (``robotCapacity`` absent), the
 depot is open floor; so with more robots than stations the plan sends them to a station in
@@ -45,7 +46,8 @@ def _scene(robots: int, parts: int, *, shared: bool) -> KittingScene:
     scene = kitting_scene(robots, parts)
     if not shared:
         apply_ops(
-            scene, [UpdateElement(id=s, properties={"robotCapacity": 0}) for s in scene.stations]
+            scene,
+            [UpdateElement(id=s, properties={"robotCapacity": robots}) for s in scene.stations],
         )
     return scene
 

@@ -1,20 +1,24 @@
 """Room for robots: a place that holds one robot is never planned for two at once.
 
-A location's ``robotCapacity`` (ontology; absent means one) says how many robots may stand at
-it. For every location of the task that holds one robot (a *spot*: a station's work spot, a
-home, a narrow passage) the task gets the fact ``free_spot(x)``, true in the initial state
-when no robot is ``at`` it. Every action that moves the agent's own robot (its effects add
-``at(robot, goal)`` and delete ``at(robot, start)``: navigate) then
+How many robots a location holds is its ``robotCapacity``
+(:func:`skill_agent.skills.robot_capacity`: absent, one, or none at a surface such as a
+shelf). Every action that moves the agent's own robot (its effects add ``at(robot, goal)``
+and delete ``at(robot, start)``: navigate) gets, by the goal's kind of place:
 
-- needs ``free_spot(goal)`` and deletes it (the robot takes the spot),
-- adds ``free_spot(start)`` (it leaves the spot it stood at).
+- a *spot* (holds one robot: a station's work spot, a home, a narrow passage): the fact
+  ``free_spot(x)``, true in the initial state when no robot is ``at`` it. The action needs
+  ``free_spot(goal)`` and deletes it (the robot takes the spot) and adds ``free_spot(start)``
+  (it leaves the spot it stood at). So a second robot's arrival at a spot is planned after
+  the first robot's departure, and the partial order keeps that (the arrival reads
+  ``free_spot``, which the departure adds);
+- an *open* place (holds more than one: a depot, an open floor): a variant of the action,
+  named ``<action>__open``, needs the static ``open_place(goal)`` and counts nobody (the
+  navigate skill's reservation enforces the capacity at run time); it too frees its start;
+- a place for no robot (``robotCapacity`` 0, a surface): neither fact holds, so no robot is
+  planned there.
 
-So a second robot's arrival at a spot is planned after the first robot's departure, and the
-partial order keeps that (the arrival reads ``free_spot``, which the departure adds). A
-location with a larger capacity (or 0: no limit) is *open*: the planner does not count
-robots there; the navigate skill's reservation enforces its capacity at run time. When the
-task has both kinds, a moving action comes in two variants: one for spots (static
-``spot(goal)``) and one for open places (``not spot(goal)``), named ``<action>__open``.
+Adding ``free_spot`` of a start that is an open place is harmless: any number of robots may
+go there anyway.
 """
 
 from __future__ import annotations
@@ -30,18 +34,12 @@ from wm_store.ontology import Cls, Rel
 from ._model import ActionSchema, GroundFact, Lit
 from ._vocabulary import Vocabulary
 
-__all__ = ["FREE", "SPOT", "holds_one_robot", "room_for_robots"]
+__all__ = ["FREE", "OPEN", "room_for_robots"]
 
 FREE = "free_spot"
 """The fact ``free_spot(x)``: no robot stands at (or is planned into) the spot ``x``."""
-SPOT = "spot"
-"""The static fact ``spot(x)``: ``x`` holds one robot (only when the task also has open
-places)."""
-
-
-def holds_one_robot(view: WorldView, location: str) -> bool:
-    """The location holds one robot at a time (its ``robotCapacity`` is 1 or absent)."""
-    return robot_capacity(view, location) == 1
+OPEN = "open_place"
+"""The static fact ``open_place(x)``: ``x`` holds several robots."""
 
 
 def _moves(schema: ActionSchema, robot: str) -> tuple[list[str], list[str]]:
@@ -66,47 +64,39 @@ def _with(
 def room_for_robots(
     vocab: Vocabulary, actions: dict[str, ActionSchema], robots: dict[str, str]
 ) -> tuple[dict[str, ActionSchema], set[GroundFact]]:
-    """``actions`` with the spot rules (module doc) and the initial ``free_spot`` / ``spot``
-    facts (their predicates are declared in ``vocab``). ``robots``: action name -> the
-    agent's robot."""
+    """``actions`` with the rules of the module doc and the initial ``free_spot`` /
+    ``open_place`` facts (their predicates are declared in ``vocab``). ``robots``: action
+    name -> the agent's robot."""
     view = vocab.view
-    places = [o for o in vocab.objects if _is_location(view, o)]
-    spots = {o for o in places if holds_one_robot(view, o)}
-    if not spots or Rel.at not in vocab.relations:
+    moving = {name for name, s in actions.items() if _moves(s, robots.get(name, ""))[0]}
+    if not moving:
         return actions, set()
-    mixed = len(spots) < len(places)
+    capacity = {o: robot_capacity(view, o) for o in vocab.objects}
+    spots = {o for o, c in capacity.items() if c == 1}
+    opens = {o for o, c in capacity.items() if c is not None and c > 1}
     occupied = {
         rel.object for rel in view.query_relation(predicate=Rel.at) if _is_robot(view, rel.subject)
     }
     init: set[GroundFact] = {(FREE, (s,)) for s in spots - occupied}
     vocab.names.declare(FREE, "opaque", 1)
-    if mixed:
-        spot = vocab.names.declare(SPOT, "opaque", 1)
-        vocab.names.predicates[SPOT] = msgspec.structs.replace(spot, static=True)
-        init |= {(SPOT, (s,)) for s in spots}
+    if opens:
+        declared = vocab.names.declare(OPEN, "opaque", 1)
+        vocab.names.predicates[OPEN] = msgspec.structs.replace(declared, static=True)
+        init |= {(OPEN, (o,)) for o in opens}
     out: dict[str, ActionSchema] = {}
     for name, schema in actions.items():
-        goals, starts = _moves(schema, robots.get(name, ""))
-        if not goals:
+        if name not in moving:
             out[name] = schema
             continue
+        goals, starts = _moves(schema, robots[name])
         leave = [Lit(FREE, (s,)) for s in starts]
         take = [Lit(FREE, (g,)) for g in goals]
         taken = [Lit(FREE, (g,), False) for g in goals]
-        if not mixed:
-            out[name] = _with(schema, name, take, taken, leave)
-            continue
-        out[name] = _with(schema, name, [*take, *(Lit(SPOT, (g,)) for g in goals)], taken, leave)
-        open_name = f"{name}__open"
-        out[open_name] = _with(
-            schema, open_name, [Lit(SPOT, (g,), False) for g in goals], [], leave
-        )
+        out[name] = _with(schema, name, take, taken, leave)
+        if opens:
+            wide = f"{name}__open"
+            out[wide] = _with(schema, wide, [Lit(OPEN, (g,)) for g in goals], [], leave)
     return out, init
-
-
-def _is_location(view: WorldView, element_id: str) -> bool:
-    element = view.find_element(element_id)
-    return element is not None and view.ontology.is_a(element.type, Cls.Location)
 
 
 def _is_robot(view: WorldView, element_id: str) -> bool:

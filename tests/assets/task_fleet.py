@@ -106,7 +106,7 @@ async def _scene(wm: WmClient, parts: int) -> dict[str, list[str]]:
             type="Location",
             label="depot",
             ref="$depot",
-            properties={**_pose(0, 0), "robotCapacity": 0},
+            properties={**_pose(0, 0), "robotCapacity": 50},
         )
     ]
     for s in (1, 2):

@@ -208,7 +208,7 @@ def kitting_scene(
             type="Location",
             label="depot",
             ref="$depot",
-            properties={**_pose(0), "robotCapacity": 0},
+            properties={**_pose(0), "robotCapacity": 50},
         )
     ]
     for s in range(stations):

@@ -71,9 +71,13 @@ async def test_a_full_place_fails_after_the_wait_naming_who_is_there(kit: Rig) -
     await kit.wm.transact([UpdateElement(id=station, properties={Prop.robotCapacity: 2})])
     assert await reserve(kit.wm, kit["r1"], station, wait=0.1)
     assert not await reserve(kit.wm, kit["r1"], station, wait=0.1)  # it holds one already
-    # no limit: nothing to reserve
+    # a place for no robot: refused at once, without waiting
     await kit.wm.transact([UpdateElement(id=station, properties={Prop.robotCapacity: 0})])
-    assert not await reserve(kit.wm, kit["r2"], station, wait=0.1)
+    with pytest.raises(SkillFailure, match="Station-1 is no place for a robot"):
+        await reserve(kit.wm, kit["r2"], station, wait=60.0)
+    # a shelf is a surface: robots work beside it
+    with pytest.raises(SkillFailure, match="Shelf-1 is no place for a robot"):
+        await reserve(kit.wm, kit["r2"], kit["Shelf-1"], wait=60.0)
 
 
 def base_of(kit: Rig, robot: str) -> FakeBase:

@@ -100,7 +100,7 @@ def test_types_objects_and_initial_facts(kitting: tuple[KittingScene, PlanningTa
         "has_pose",
         "is_Appliance",
         "free_spot",
-        "spot",
+        "open_place",
     }
     assert task.predicates["is_Appliance"].static
     assert not any(f[0] == "is_Appliance" for f in task.init)

@@ -1,6 +1,7 @@
 """Shared space in the planner: a place that holds one robot (``robotCapacity`` absent or 1)
-is never planned for two robots at once, and the partial order keeps a second robot's arrival
-after the first one's departure, in every order the robots may run it."""
+is never planned for two robots at once, one for no robot never for any, and the partial order
+keeps a second robot's arrival after the first one's departure, in every order the robots may
+run it."""
 
 from __future__ import annotations
 
@@ -49,36 +50,38 @@ def test_spots_get_free_facts_and_moving_actions_take_and_leave_them() -> None:
     station = scene.stations[0]
     assert ("free_spot", (station,)) in task.init  # nobody there
     assert ("free_spot", (scene.depot,)) not in task.init  # open floor: not counted
-    assert ("spot", (station,)) in task.init and ("spot", (scene.depot,)) not in task.init
+    assert ("open_place", (scene.depot,)) in task.init
+    assert ("open_place", (station,)) not in task.init
     nav = task.actions["navigate__r1"]
-    assert Lit("free_spot", ("?goal",)) in nav.pre and Lit("spot", ("?goal",)) in nav.pre
+    assert Lit("free_spot", ("?goal",)) in nav.pre
     assert Lit("free_spot", ("?goal",), False) in nav.delete
     assert Lit("free_spot", ("?start",)) in nav.add
     to_open = task.actions["navigate__r1__open"]
-    assert Lit("spot", ("?goal",), False) in to_open.pre
+    assert Lit("open_place", ("?goal",)) in to_open.pre
     assert not any(lit.pred == "free_spot" for lit in (*to_open.pre, *to_open.delete))
     assert Lit("free_spot", ("?start",)) in to_open.add  # leaving a spot frees it
-    assert task.predicates["spot"].static and not task.predicates["free_spot"].static
+    assert task.predicates["open_place"].static and not task.predicates["free_spot"].static
     pick = task.actions["pick__r1"]  # moves no robot: unchanged
-    assert not any(lit.pred in ("free_spot", "spot") for lit in (*pick.pre, *pick.add))
+    assert not any(lit.pred in ("free_spot", "open_place") for lit in (*pick.pre, *pick.add))
 
 
-def test_an_occupied_spot_is_not_free_and_open_places_need_no_variants() -> None:
+def test_an_occupied_spot_is_not_free_and_a_place_for_no_robot_is_never_a_goal() -> None:
     scene = kitting_scene(2, 4, stations=2)
     depot, s1, s2 = scene.depot, *scene.stations
-    # r1 parked at station 1; every place is a spot (the depot holds one robot too)
+    # every place a spot (the depot holds one robot too): no open variants
     apply_ops(scene, [UpdateElement(id=depot, properties={"robotCapacity": 1})])
     view = scene.view
-    goal = parse_goal(f"contain({scene.kits[0]}, {scene.parts[0]})", view)
+    goal = parse_goal(f"contain({scene.kits[0]}, {scene.parts[2]})", view)  # at station 2
     task = build_task(agents_from_view(view), view, goal)
     assert ("free_spot", (depot,)) not in task.init  # the robots stand there
     assert ("free_spot", (s1,)) in task.init and ("free_spot", (s2,)) in task.init
-    assert "spot" not in task.predicates and "navigate__r1__open" not in task.actions
-    # no limit anywhere: nothing is counted
-    apply_ops(scene, [UpdateElement(id=s, properties={"robotCapacity": 0}) for s in (s1, s2)])
-    apply_ops(scene, [UpdateElement(id=depot, properties={"robotCapacity": 0})])
+    assert "open_place" not in task.predicates and "navigate__r1__open" not in task.actions
+    # station 1 holds no robot: only station 2 is a goal the planner may choose
+    apply_ops(scene, [UpdateElement(id=s1, properties={"robotCapacity": 0})])
     task = build_task(agents_from_view(view), view, goal)
-    assert "free_spot" not in task.predicates and "navigate__r1__open" not in task.actions
+    assert ("free_spot", (s1,)) not in task.init and ("open_place", (s1,)) not in task.init
+    plan = Planner().solve(task)
+    assert all(s.params.get("goal") != s1 for s in plan.steps if s.skill == "navigate")
 
 
 @pytest.mark.parametrize("engine", ENGINES)
