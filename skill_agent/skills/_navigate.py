@@ -11,8 +11,9 @@ Room for robots (``skill_agent/skills/_spots.py``): before the base moves, the r
 a place at the goal in the world model (compare-and-set on the goal's revision); while the
 goal is full it waits, up to ``wait_for_room`` seconds, for a robot to leave, and then fails
 naming who is there. Once the base has arrived, the robot gives back every other place it
-held (its start); when the drive fails or is stopped, it gives back the goal unless the base
-stopped within :data:`NEAR_GOAL` of it (it then stands in the way there).
+held (its start), in the transaction that records where the base stands; when the drive
+fails or is stopped, it gives back the goal unless the base stopped within
+:data:`NEAR_GOAL` of it (it then stands in the way there).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from skill_agent.primitives._supervise import halt
 from skill_agent.primitives.poses import to_wm_pose, yaw_of
 from skill_agent.protocol._skills import HasPropertyCond, ParamSpec, SkillDescription
 from skill_agent.skills._params import BASE, ROBOT, at, offline
-from skill_agent.skills._spots import release, reserve
+from skill_agent.skills._spots import release, release_ops, reserve
 from skill_agent.skills._support import (
     carried_ops,
     device,
@@ -38,7 +39,7 @@ from skill_agent.skills._support import (
     wm_of,
     world_transform,
 )
-from wm_store import WmClient, display_name
+from wm_store import ConflictError, WmClient, display_name
 from wm_store.ontology import Prop
 from wm_store.protocol import Observe, Op, UpdateElement
 from wm_store.reasoners import Transform, quat_from_yaw
@@ -116,12 +117,7 @@ class Navigate(Skill):
             raise SkillFailure(f"navigate: the world model has no pose of {goal}")
         base = device(ctx, "base", MobileBase)  # type: ignore[type-abstract]
         target = _pose2d(where)
-        robot = element_id(ctx, "robot")
-
-        async def waiting(message: str) -> None:
-            await ctx.progress(message, step="wait for room")
-
-        await reserve(wm, robot, goal, wait=float_param(ctx, "wait_for_room"), waiting=waiting)
+        await self.take_room(ctx)
         try:
             await tracked(
                 ctx,
@@ -132,7 +128,21 @@ class Navigate(Skill):
         except MotionError as exc:
             await self._give_back(ctx, await self._record(ctx))
             raise failure("navigate", exc) from exc
-        await release(wm, robot, keep=goal)  # it has left its start
+
+    async def take_room(self, ctx: SkillContext) -> None:
+        """Reserve a place at the goal, waiting for room (see the module doc)."""
+
+        async def waiting(message: str) -> None:
+            await ctx.progress(message, step="wait for room")
+
+        wait = float_param(ctx, "wait_for_room")
+        goal = element_id(ctx, "goal")
+        await reserve(wm_of(ctx), element_id(ctx, "robot"), goal, wait=wait, waiting=waiting)
+
+    def leave_start(self, ctx: SkillContext) -> list[Op]:
+        """Once arrived: the ops giving back every other place the robot held (its start),
+        committed with the base's report."""
+        return list(release_ops(wm_of(ctx), element_id(ctx, "robot"), keep=element_id(ctx, "goal")))
 
     async def _give_back(self, ctx: SkillContext, reached: Pose2D) -> None:
         """After a failed or stopped drive: release the goal unless the base stands near it."""
@@ -146,7 +156,7 @@ class Navigate(Skill):
         await release(wm, element_id(ctx, "robot"), only=goal)
 
     async def post_sense(self, ctx: SkillContext) -> None:
-        reached = await self._record(ctx)
+        reached = await self._record(ctx, arrived=True)
         where = world_transform(wm_of(ctx), element_id(ctx, "goal"))
         assert where is not None  # checked in execute
         goal = _pose2d(where)
@@ -162,12 +172,19 @@ class Navigate(Skill):
         await halt(base)
         await self._give_back(ctx, await self._record(ctx))
 
-    async def _record(self, ctx: SkillContext) -> Pose2D:
-        """Write where the base stands now (robot pose and what it carries)."""
+    async def _record(self, ctx: SkillContext, *, arrived: bool = False) -> Pose2D:
+        """Write where the base stands now (robot pose and what it carries); ``arrived``: with
+        the places the robot left given back, in the same transaction."""
         base = device(ctx, "base", MobileBase)  # type: ignore[type-abstract]
         reached = (await base.state()).pose
         wm = wm_of(ctx)
-        await wm.transact(
-            follow_ops(wm, element_id(ctx, "robot"), element_id(ctx, "base"), reached)
-        )
-        return reached
+        robot = element_id(ctx, "robot")
+        for _ in range(20):  # a place given back changed meanwhile: read again
+            ops = follow_ops(wm, robot, element_id(ctx, "base"), reached)
+            try:
+                await wm.transact(ops + (self.leave_start(ctx) if arrived else []))
+                return reached
+            except ConflictError:
+                await release(wm, robot, keep=element_id(ctx, "goal"))  # then record alone
+                arrived = False
+        raise SkillFailure("navigate: could not record where the base stands")

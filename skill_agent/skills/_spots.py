@@ -26,7 +26,14 @@ from wm_store import ConflictError, WmClient, display_name
 from wm_store.ontology import Cls, Prop, Rel
 from wm_store.protocol import Change, Element, UpdateElement, Value
 
-__all__ = ["holders", "release", "reserve", "reserved_by", "robot_capacity"]
+__all__ = [
+    "holders",
+    "release",
+    "release_ops",
+    "reserve",
+    "reserved_by",
+    "robot_capacity",
+]
 
 
 def reserved_by(element: Element) -> list[str]:
@@ -136,24 +143,31 @@ async def reserve(
         await _changed(wm, left)
 
 
+def release_ops(
+    view: WorldView, robot: str, *, keep: str = "", only: str = ""
+) -> list[UpdateElement]:
+    """Ops removing ``robot`` from the ``reservedBy`` of every location (or of ``only``) but
+    ``keep``, each a compare-and-set on the location's revision."""
+    ops = []
+    for element in view.resolve_element(type=Cls.Location):
+        if element.id == keep or (only and element.id != only):
+            continue
+        reserved = reserved_by(element)
+        if robot in reserved:
+            rest: Value = [r for r in reserved if r != robot]
+            ops.append(
+                UpdateElement(
+                    id=element.id, properties={Prop.reservedBy: rest}, expect_rev=element.rev
+                )
+            )
+    return ops
+
+
 async def release(wm: WmClient, robot: str, *, keep: str = "", only: str = "") -> list[str]:
     """Remove ``robot`` from the ``reservedBy`` of every location (or of ``only``), but
     ``keep``; returns the places released."""
     for _ in range(20):  # compare-and-set; a conflict means someone else wrote: read again
-        ops = []
-        for element in wm.resolve_element(type=Cls.Location):
-            if element.id == keep or (only and element.id != only):
-                continue
-            reserved = reserved_by(element)
-            if robot in reserved:
-                rest: Value = [r for r in reserved if r != robot]
-                ops.append(
-                    UpdateElement(
-                        id=element.id,
-                        properties={Prop.reservedBy: rest},
-                        expect_rev=element.rev,
-                    )
-                )
+        ops = release_ops(wm, robot, keep=keep, only=only)
         if not ops:
             return []
         try:
