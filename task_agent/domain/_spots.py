@@ -17,8 +17,9 @@ and delete ``at(robot, start)``: navigate) gets, by the goal's kind of place:
 - a place for no robot (``robotCapacity`` 0, a surface): neither fact holds, so no robot is
   planned there.
 
-Adding ``free_spot`` of a start that is an open place is harmless: any number of robots may
-go there anyway.
+When the task has no spot, the action keeps its name and needs ``open_place(goal)``; when it
+has neither a spot nor a place for no robot, nothing changes. Adding ``free_spot`` of a start
+that is an open place is harmless: any number of robots may go there anyway.
 """
 
 from __future__ import annotations
@@ -74,11 +75,14 @@ def room_for_robots(
     capacity = {o: robot_capacity(view, o) for o in vocab.objects}
     spots = {o for o, c in capacity.items() if c == 1}
     opens = {o for o, c in capacity.items() if c is not None and c > 1}
+    if not spots and not any(c == 0 for c in capacity.values()):
+        return actions, set()  # nothing to count, nowhere to keep robots from
     occupied = {
         rel.object for rel in view.query_relation(predicate=Rel.at) if _is_robot(view, rel.subject)
     }
     init: set[GroundFact] = {(FREE, (s,)) for s in spots - occupied}
-    vocab.names.declare(FREE, "opaque", 1)
+    if spots:
+        vocab.names.declare(FREE, "opaque", 1)
     if opens:
         declared = vocab.names.declare(OPEN, "opaque", 1)
         vocab.names.predicates[OPEN] = msgspec.structs.replace(declared, static=True)
@@ -89,13 +93,16 @@ def room_for_robots(
             out[name] = schema
             continue
         goals, starts = _moves(schema, robots[name])
+        wide = [Lit(OPEN, (g,)) for g in goals]
+        if not spots:
+            out[name] = _with(schema, name, wide, [], [])
+            continue
         leave = [Lit(FREE, (s,)) for s in starts]
         take = [Lit(FREE, (g,)) for g in goals]
         taken = [Lit(FREE, (g,), False) for g in goals]
         out[name] = _with(schema, name, take, taken, leave)
         if opens:
-            wide = f"{name}__open"
-            out[wide] = _with(schema, wide, [Lit(OPEN, (g,)) for g in goals], [], leave)
+            out[f"{name}__open"] = _with(schema, f"{name}__open", wide, [], leave)
     return out, init
 
 

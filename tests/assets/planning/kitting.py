@@ -196,25 +196,27 @@ def kitting_scene(
     boxes_per_station: int = 2,
     skills: Sequence[SkillDescription] = (NAVIGATE, PICK, PLACE),
     ontology: Ontology | None = None,
+    station_capacity: int | None = None,
 ) -> KittingScene:
     """``robots`` agents ``r1..rN`` (mobile manipulators with a gripper, a kit box on board,
-    at the depot) and ``parts`` gears spread over part boxes at ``stations`` stations."""
+    at the depot) and ``parts`` gears spread over part boxes at ``stations`` stations. The
+    depot and, unless ``station_capacity`` says how many robots a station holds, each station
+    have room for every robot (``robotCapacity``): nothing is counted."""
     onto = ontology or Ontology.default()
     state = SceneState()
     state.set_spatial_predicates(n for n, r in onto.relations.items() if r.spatial)
-    # the depot is open floor: every robot waits there (no limit on robots)
+    room = {"robotCapacity": max(robots, 2)}  # room for every robot
+    station_room = room if station_capacity is None else {"robotCapacity": station_capacity}
     ops: list[Op] = [
-        AddElement(
-            type="Location",
-            label="depot",
-            ref="$depot",
-            properties={**_pose(0), "robotCapacity": 50},
-        )
+        AddElement(type="Location", label="depot", ref="$depot", properties={**_pose(0), **room})
     ]
     for s in range(stations):
         ops.append(
             AddElement(
-                type="Station", label=f"station-{s + 1}", ref=f"$s{s}", properties=_pose(s + 1)
+                type="Station",
+                label=f"station-{s + 1}",
+                ref=f"$s{s}",
+                properties={**_pose(s + 1), **station_room},
             )
         )
         for b in range(boxes_per_station):

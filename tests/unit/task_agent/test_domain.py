@@ -48,9 +48,7 @@ def test_one_action_per_agent_and_skill(kitting: tuple[KittingScene, PlanningTas
     scene, task = kitting
     assert sorted(task.actions) == [
         "navigate__r1",
-        "navigate__r1__open",  # to an open place (the depot), beside the one to a spot
         "navigate__r2",
-        "navigate__r2__open",
         "pick__r1",
         "pick__r2",
         "place__r1",
@@ -94,14 +92,7 @@ def test_types_objects_and_initial_facts(kitting: tuple[KittingScene, PlanningTa
     assert task.objects["KitBox-1"] == task.objects["PartBox-1"] == "Container"
     assert task.objects["Station-1"] == task.objects[scene.depot] == "Location"
     assert "Skill-1" not in task.objects
-    assert set(task.predicates) == {
-        "contain",
-        "at",
-        "has_pose",
-        "is_Appliance",
-        "free_spot",
-        "open_place",
-    }
+    assert set(task.predicates) == {"contain", "at", "has_pose", "is_Appliance"}
     assert task.predicates["is_Appliance"].static
     assert not any(f[0] == "is_Appliance" for f in task.init)
     assert ("has_pose", ("Station-1",)) in task.init

@@ -87,7 +87,7 @@ def test_kitting_plan_is_valid_and_uses_both_robots(
     assert {s.agent for s in plan.steps} == {"r1", "r2"}
     for step in plan.steps:
         robot = scene.robots[int(step.agent[1:]) - 1]
-        assert step.action.startswith(f"{step.skill}__{step.agent}")  # __open: to the depot
+        assert step.action == f"{step.skill}__{step.agent}"
         assert step.params["robot"] == robot
         if step.skill in ("pick", "place"):
             assert step.params["gripper"] == f"Gripper-{step.agent[1:]}"

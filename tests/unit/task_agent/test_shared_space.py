@@ -23,7 +23,7 @@ ENGINES: list[Engine] = ["kairos", "fast-downward"]
 
 def one_station(robots: int = 2) -> tuple[KittingScene, PlanningTask]:
     """Every part on one station's shelf; each robot's kit wants one of them."""
-    scene = kitting_scene(robots, 2 * robots, stations=1)
+    scene = kitting_scene(robots, 2 * robots, stations=1, station_capacity=1)
     goal = " and ".join(f"contain({k}, {p})" for k, p in zip(scene.kits, scene.parts, strict=False))
     view = scene.view
     return scene, build_task(agents_from_view(view), view, parse_goal(goal, view))
@@ -66,7 +66,7 @@ def test_spots_get_free_facts_and_moving_actions_take_and_leave_them() -> None:
 
 
 def test_an_occupied_spot_is_not_free_and_a_place_for_no_robot_is_never_a_goal() -> None:
-    scene = kitting_scene(2, 4, stations=2)
+    scene = kitting_scene(2, 4, stations=2, station_capacity=1)
     depot, s1, s2 = scene.depot, *scene.stations
     # every place a spot (the depot holds one robot too): no open variants
     apply_ops(scene, [UpdateElement(id=depot, properties={"robotCapacity": 1})])
@@ -159,3 +159,21 @@ def test_three_robots_for_one_station_plan_fast() -> None:
     stays.sort()
     for (_, end), (begin, _) in itertools.pairwise(stays):
         assert begin >= end - 1e-9
+
+
+def test_room_for_every_robot_leaves_the_domain_as_it_was() -> None:
+    scene = kitting_scene(2, 4)  # every place has room for both robots
+    view = scene.view
+    goal = parse_goal(f"contain({scene.kits[0]}, {scene.parts[2]})", view)
+    task = build_task(agents_from_view(view), view, goal)
+    assert "free_spot" not in task.predicates and "open_place" not in task.predicates
+    assert sorted(n for n in task.actions if n.startswith("navigate")) == [
+        "navigate__r1",
+        "navigate__r2",
+    ]
+    # a station for no robot: the others stay open, the action keeps its name
+    apply_ops(scene, [UpdateElement(id=scene.stations[0], properties={"robotCapacity": 0})])
+    task = build_task(agents_from_view(view), view, goal)
+    assert Lit("open_place", ("?goal",)) in task.actions["navigate__r1"].pre
+    assert "free_spot" not in task.predicates and "navigate__r1__open" not in task.actions
+    assert ("open_place", (scene.stations[0],)) not in task.init
