@@ -205,7 +205,8 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
         drawer: The drawer of a ``cabinet`` (only a cabinet has one).
         robot_capacity: How many robots may stand at it at once (the world model's
             ``robotCapacity``): a station's work spot holds one, a shelf or a table none (the
-            defaults, when this is not given); 0: no robot goes there.
+            defaults, when this is not given; other locations have no limit); 0: no robot goes
+            there.
     """
 
     type: str

@@ -30,7 +30,8 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
   containers the ``capacity`` of their class's default individual in the ontology (KitBox 6,
   Tray 2), so "not full" pre-conditions count against it; furniture its ``robot_capacity``
   as ``robotCapacity``, when given (robots a station holds at once; absent: the ontology's
-  default, one at a station or a home, none at a surface).
+  default, one at a station, none at a surface); each robot's home ``robotCapacity`` 1 (its
+  parking place: no other robot is sent there while it stands in it).
 - **at** (symbolic locations for the planner): every furniture, appliance and open container
   (not closed, not on a robot) is ``at`` its station (through the furniture it stands on), else
   ``at`` the home of a robot whose arm reaches it from its start pose, else nowhere. Closed
@@ -137,7 +138,8 @@ class _Builder:
     def robots_and_homes(self) -> None:
         for r in self.s.robots:
             pose = pose_at(r.pose.x, r.pose.y, 0.0, r.pose.yaw)
-            self.add(Cls.Location, home_label(r.name), {Prop.pose: pose})
+            home: dict[str, Value] = {Prop.pose: pose, Prop.robotCapacity: 1}  # its parking place
+            self.add(Cls.Location, home_label(r.name), home)
             self.add(r.type, r.name, {Prop.pose: pose})
             for device, cls in robot_devices(r):
                 props: dict[str, Value] = {}

@@ -1,8 +1,8 @@
 """Room for robots at run time: a robot reserves a place in the world model before its base
 drives there, and gives it back when it has left.
 
-A location holds ``robotCapacity`` robots (absent: one, none at a surface such as a shelf).
-Who takes room there:
+A location holds ``robotCapacity`` robots (absent: one at a station, none at a surface such
+as a shelf, no limit elsewhere). Who takes room there:
 the robots in its ``reservedBy`` list and the robots ``at`` it that hold no reservation (a
 robot that stood there from the start). :func:`reserve` adds the robot to ``reservedBy`` with
 a compare-and-set on the location's revision (``UpdateElement.expect_rev``): two robots
@@ -43,16 +43,19 @@ def reserved_by(element: Element) -> list[str]:
 
 
 def robot_capacity(view: WorldView, place: str) -> int | None:
-    """How many robots may stand at ``place``: its ``robotCapacity``; absent, 0 at a surface
-    (robots work beside a shelf or a table, from a station) and 1 at any other location.
-    None: ``place`` is no location."""
+    """How many robots may stand at ``place``: its ``robotCapacity``; absent, 1 at a station,
+    0 at a surface (robots work beside a shelf or a table, from a station). None: no limit
+    (any other location without one), or ``place`` is no location."""
     element = view.find_element(place)
-    if element is None or not view.ontology.is_a(element.type, Cls.Location):
+    onto = view.ontology
+    if element is None or not onto.is_a(element.type, Cls.Location):
         return None
     cap = element.properties.get(Prop.robotCapacity)
     if isinstance(cap, int | float) and not isinstance(cap, bool):
         return max(int(cap), 0)
-    return 0 if view.ontology.is_a(element.type, Cls.Surface) else 1
+    if onto.is_a(element.type, Cls.Station):
+        return 1
+    return 0 if onto.is_a(element.type, Cls.Surface) else None
 
 
 def holders(view: WorldView, place: str) -> set[str]:
@@ -98,7 +101,7 @@ async def reserve(
 ) -> bool:
     """Reserve room for ``robot`` at ``place`` (compare-and-set), waiting up to ``wait``
     seconds while it is full; ``waiting(message)`` is awaited once when the wait starts. True
-    if a reservation was added, False if none is needed (no location, or it holds one
+    if a reservation was added, False if none is needed (no limit there, or it holds one
     already). SkillFailure at once when no robot may stand there, and naming the holders
     when the time runs out."""
     deadline = time.monotonic() + wait

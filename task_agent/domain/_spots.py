@@ -1,9 +1,10 @@
 """Room for robots: a place that holds one robot is never planned for two at once.
 
 How many robots a location holds is its ``robotCapacity``
-(:func:`skill_agent.skills.robot_capacity`: absent, one, or none at a surface such as a
-shelf). Every action that moves the agent's own robot (its effects add ``at(robot, goal)``
-and delete ``at(robot, start)``: navigate) gets, by the goal's kind of place:
+(:func:`skill_agent.skills.robot_capacity`: absent, one at a station, none at a surface such
+as a shelf, no limit elsewhere). Every action that moves the agent's own robot (its effects
+add ``at(robot, goal)`` and delete ``at(robot, start)``: navigate) gets, by the goal's kind of
+place:
 
 - a *spot* (holds one robot: a station's work spot, a home, a narrow passage): the fact
   ``free_spot(x)``, true in the initial state when no robot is ``at`` it. The action needs
@@ -11,7 +12,8 @@ and delete ``at(robot, start)``: navigate) gets, by the goal's kind of place:
   (it leaves the spot it stood at). So a second robot's arrival at a spot is planned after
   the first robot's departure, and the partial order keeps that (the arrival reads
   ``free_spot``, which the departure adds);
-- an *open* place (holds more than one: a depot, an open floor): a variant of the action,
+- an *open* place (holds more than one, or has no limit: a depot, an open floor): a variant
+  of the action,
   named ``<action>__open``, needs the static ``open_place(goal)`` and counts nobody (the
   navigate skill's reservation enforces the capacity at run time); it too frees its start;
 - a place for no robot (``robotCapacity`` 0, a surface): neither fact holds, so no robot is
@@ -74,7 +76,8 @@ def room_for_robots(
         return actions, set()
     capacity = {o: robot_capacity(view, o) for o in vocab.objects}
     spots = {o for o, c in capacity.items() if c == 1}
-    opens = {o for o, c in capacity.items() if c is not None and c > 1}
+    places = {o for o in vocab.objects if _is_location(view, o)}
+    opens = {o for o in places if (c := capacity[o]) is None or c > 1}
     if not spots and not any(c == 0 for c in capacity.values()):
         return actions, set()  # nothing to count, nowhere to keep robots from
     occupied = {
@@ -104,6 +107,11 @@ def room_for_robots(
         if opens:
             out[f"{name}__open"] = _with(schema, f"{name}__open", wide, [], leave)
     return out, init
+
+
+def _is_location(view: WorldView, element_id: str) -> bool:
+    element = view.find_element(element_id)
+    return element is not None and view.ontology.is_a(element.type, Cls.Location)
 
 
 def _is_robot(view: WorldView, element_id: str) -> bool:

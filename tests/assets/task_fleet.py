@@ -7,7 +7,7 @@ Scene (element ids in :class:`Fleet` fields)::
 
     depot (Location)          robots r1..rN at the depot (or where ``start`` says)
     Station-1, Station-2      each: a PartBox (at the station) with gears, a Tray (at it)
-    (each place has room for every robot: ``robotCapacity``)
+    (the depot is open floor; each station has room for every robot: ``robotCapacity``)
     robot-i contain KitBox-i  each robot carries its kit box
 
 Goals that need both robots: fill each robot's kit (``kit_goal``); goals either robot can
@@ -102,12 +102,7 @@ def _pose(x: float, y: float) -> dict[str, Value]:
 
 async def _scene(wm: WmClient, parts: int, robots: int) -> dict[str, list[str]]:
     ops: list[Op] = [
-        AddElement(
-            type="Location",
-            label="depot",
-            ref="$depot",
-            properties={**_pose(0, 0), "robotCapacity": max(robots, 2)},
-        )
+        AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0, 0))
     ]
     for s in (1, 2):
         ops += [
