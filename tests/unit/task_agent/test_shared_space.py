@@ -16,6 +16,7 @@ from task_agent.domain import Lit, PlanningTask, build_task
 from task_agent.planning import Engine, PartialOrderPlan, Planner, to_partial_order
 from task_agent.reachability import replay
 from tests.assets.planning import KittingScene, apply_ops, kitting_scene
+from tests.unit.task_agent.test_partial_order import linear_extensions
 from wm_store.protocol import UpdateElement
 
 ENGINES: list[Engine] = ["kairos", "fast-downward"]
@@ -114,22 +115,10 @@ def test_two_robots_for_one_station_take_turns(engine: Engine) -> None:
     )
     assert po.steps[second_in].start >= po.steps[leaves].finish
     rng = random.Random(3)
-    for order in _extensions(po, rng, 30):
+    for order in linear_extensions(po, rng, 30):
         _, problem = replay(task, [po.steps[i].step.ground for i in order])
         assert problem == ""
         assert occupancy_peaks(task, po, order).get(station, 0) <= 1
-
-
-def _extensions(po: PartialOrderPlan, rng: random.Random, count: int) -> list[list[int]]:
-    out = []
-    for _ in range(count):
-        preds = {i: set(po.predecessors(i)) for i in range(len(po.steps))}
-        done: list[int] = []
-        while len(done) < len(po.steps):
-            ready = [i for i in preds if i not in done and preds[i] <= set(done)]
-            done.append(rng.choice(ready))
-        out.append(done)
-    return out
 
 
 def test_three_robots_for_one_station_plan_fast() -> None:
