@@ -33,6 +33,7 @@ from mujoco_sim.control._gripper_drive import Calibration, GripperDrive, gripper
 from mujoco_sim.control._job import Controller, Job
 from mujoco_sim.control._sensing import CameraController, PlatformController
 from mujoco_sim.models._scene import build_scene, weld_name
+from mujoco_sim.physics._contacts import RobotContacts
 from mujoco_sim.physics._health import DEFAULT_MAX_ACCELERATION, check_state
 from mujoco_sim.physics._options import TIMESTEP
 from mujoco_sim.physics._state import hold_servos, set_joint_positions
@@ -89,6 +90,7 @@ class Plant:
         self.batches_run = 0  # simulation thread; read by SimWorld.statistics
         self.ticks_run = 0  # likewise
         self.facts = SceneFacts.build(scenario, m)
+        self.robot_contacts = RobotContacts(m, {r.name: r.spec.prefix for r in scenario.robots})
         self.controllers: dict[DeviceKey, Controller] = {}
         self.kinds: dict[DeviceKey, DeviceKind] = {}
         graspable = {label: m.body(label).id for label in self.facts.graspable}
@@ -229,6 +231,7 @@ class Plant:
             cancelled = []
         active = [ctrl for ctrl in controllers if ctrl.active]
         recorder, nstep = self.recorder, self.steps_per_tick
+        contacts = self.robot_contacts
         due = math.inf if recorder is None else recorder.next_sample
         for _ in range(ticks):
             if active:
@@ -240,6 +243,7 @@ class Plant:
                         self._report(report, self._collect(active))
                     active = [ctrl for ctrl in active if ctrl.active]
             mujoco.mj_step(m, d, nstep=nstep)
+            contacts.check(m, d)
             if d.time + 1e-9 >= due:
                 assert recorder is not None
                 recorder.sample(m, d)

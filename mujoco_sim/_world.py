@@ -112,6 +112,10 @@ class WorldStatistics(Struct, frozen=True):
     """Wall seconds spent inside batches."""
     handovers: int = 0
     """Thread calls back to the loop (in fast mode one runs many batches: see the module doc)."""
+    robot_contact_ticks: int = 0
+    """Control ticks that ended with two robots' bodies in contact (should stay 0)."""
+    first_robot_contact: str = ""
+    """The first such contact, in words ("r1 and r2 touched at t = ... s (bodies)")."""
 
 
 class SimWorld:
@@ -403,6 +407,8 @@ class SimWorld:
             slips=s.slips,
             busy=s.busy,
             handovers=s.handovers,
+            robot_contact_ticks=self.plant.robot_contacts.ticks,  # counted in the sim thread
+            first_robot_contact=str(self.plant.robot_contacts.first or ""),
         )
 
 

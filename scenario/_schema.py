@@ -203,6 +203,10 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
             planner. Empty: none.
         rgba: Colour: red, green, blue, alpha, each 0..1.
         drawer: The drawer of a ``cabinet`` (only a cabinet has one).
+        robot_capacity: How many robots may stand at it at once (the world model's
+            ``robotCapacity``): a station's work spot holds one, a shelf or a table none (the
+            defaults, when this is not given; other locations have no limit); 0: no robot goes
+            there.
     """
 
     type: str
@@ -213,6 +217,7 @@ class FurnitureEntry(Struct, frozen=True, forbid_unknown_fields=True, kw_only=Tr
     station: str = ""
     rgba: RGBA = (0.62, 0.50, 0.38, 1.0)
     drawer: DrawerSpec | None = None
+    robot_capacity: Annotated[int, Meta(ge=0)] | None = None
 
     @property
     def kind(self) -> FurnitureShape:

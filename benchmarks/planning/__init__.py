@@ -25,6 +25,9 @@ Per size, goal and engine (median of the repetitions):
 - *makespan*: ``to_partial_order(plan)`` (with balancing) beside the plan's sequential
   duration, both estimated from the skills' durations; the ideal for independent work is
   1 / robots;
+- *shared space* (``_space``): at the largest size, the plan time with the stations holding
+  one robot each (the scene as it is) beside the same scene with room for every robot at
+  every station (``robotCapacity`` = robots), solved alternately; target under 1 s at 8 x 40;
 - *executed*: the measured makespan (``_execution``): a plan for the
   same sizes and goals run on simulated-outcome agents (``--time-scale``) as its partial order
   and forced sequential, the measured ratio beside that plan's estimated one.

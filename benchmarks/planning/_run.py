@@ -13,6 +13,7 @@ import msgspec
 from benchmarks.common import format_table, machine_info
 from benchmarks.planning._cases import ENGINES, QUICK_SIZES, SIZES, details, rows, run_case
 from benchmarks.planning._execution import execute_all, executed_details, executed_rows
+from benchmarks.planning._space import run_space, space_rows
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -44,15 +45,21 @@ def main(argv: list[str] | None = None) -> int:
             for engine in engines:
                 print(f"{robots}x{parts} {goal} {engine} ...", file=sys.stderr, flush=True)
                 cases.append(run_case(robots, parts, goal, engine, reps, args.timeout))
+    space = []
+    for goal in ("two", "all"):
+        for engine in engines:
+            robots, parts = sizes[-1]
+            print(f"{robots}x{parts} {goal} {engine} shared space ...", file=sys.stderr, flush=True)
+            space.append(run_space(robots, parts, goal, engine, reps, args.timeout))
     runs = args.reps or (3 if args.quick else 5)
     executed = execute_all(sizes, time_scale=args.time_scale, reps=runs) if args.time_scale else []
-    print(format_table(rows(cases) + executed_rows(executed)))
+    print(format_table(rows(cases) + space_rows(space) + executed_rows(executed)))
     print()
     print(details(cases))
     if executed:
         print(f"\nexecuted (time scale {args.time_scale:g}; seconds of the skills, medians)")
         print(executed_details(executed))
     if args.json:
-        out = {"machine": info, "cases": cases, "executed": executed}
+        out = {"machine": info, "cases": cases, "space": space, "executed": executed}
         args.json.write_text(json.dumps(msgspec.to_builtins(out), indent=1))
     return 0

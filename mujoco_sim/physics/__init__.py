@@ -1,9 +1,11 @@
 """The physics state and options: the simulation time step and solver options, joint and servo
-state access, and the divergence check of a state.
+state access, the divergence check of a state, and the record of contacts between robots.
 """
 
 from __future__ import annotations
 
+from ._contacts import RobotContact as RobotContact
+from ._contacts import RobotContacts as RobotContacts
 from ._health import DEFAULT_MAX_ACCELERATION as DEFAULT_MAX_ACCELERATION
 from ._health import check_state as check_state
 from ._options import TIMESTEP as TIMESTEP
@@ -17,6 +19,8 @@ from ._state import site_pose as site_pose
 __all__ = [
     "DEFAULT_MAX_ACCELERATION",
     "TIMESTEP",
+    "RobotContact",
+    "RobotContacts",
     "check_state",
     "configure_physics",
     "hold_servos",

@@ -28,7 +28,10 @@ What it writes (element labels = scenario labels; device labels ``<robot>-arm``,
 - **Sizes**: furniture and containers ``SizeCuboid`` (outside extents), parts by shape;
   **masses**; appliances ``doorOpen = false``, ``heating = false``, ``heatingPower``;
   containers the ``capacity`` of their class's default individual in the ontology (KitBox 6,
-  Tray 2), so "not full" pre-conditions count against it.
+  Tray 2), so "not full" pre-conditions count against it; furniture its ``robot_capacity``
+  as ``robotCapacity``, when given (robots a station holds at once; absent: the ontology's
+  default, one at a station, none at a surface); each robot's home ``robotCapacity`` 1 (its
+  parking place: no other robot is sent there while it stands in it).
 - **at** (symbolic locations for the planner): every furniture, appliance and open container
   (not closed, not on a robot) is ``at`` its station (through the furniture it stands on), else
   ``at`` the home of a robot whose arm reaches it from its start pose, else nowhere. Closed
@@ -135,7 +138,8 @@ class _Builder:
     def robots_and_homes(self) -> None:
         for r in self.s.robots:
             pose = pose_at(r.pose.x, r.pose.y, 0.0, r.pose.yaw)
-            self.add(Cls.Location, home_label(r.name), {Prop.pose: pose})
+            home: dict[str, Value] = {Prop.pose: pose, Prop.robotCapacity: 1}  # its parking place
+            self.add(Cls.Location, home_label(r.name), home)
             self.add(r.type, r.name, {Prop.pose: pose})
             for device, cls in robot_devices(r):
                 props: dict[str, Value] = {}
@@ -152,6 +156,8 @@ class _Builder:
                 Prop.pose: pose_at(f.pose.x, f.pose.y, height / 2, f.pose.yaw),
                 Prop.size: SizeCuboid(x=f.size[0], y=f.size[1], z=height),
             }
+            if f.robot_capacity is not None:
+                props[Prop.robotCapacity] = f.robot_capacity
             self.add(f.type, f.label, props, f.station)
             if f.drawer is not None:
                 self.add(f.drawer.type, f.drawer.label, drawer_props(f), f.label, Rel.hasA)

@@ -53,6 +53,7 @@ from skill_agent.skills._place import PlaceOn as PlaceOn
 from skill_agent.skills._serve import PlaceAt as PlaceAt
 from skill_agent.skills._serve import PutIn as PutIn
 from skill_agent.skills._serve import Serve as Serve
+from skill_agent.skills._spots import robot_capacity as robot_capacity
 
 __all__ = [
     "ALL_SKILLS",
@@ -77,6 +78,7 @@ __all__ = [
     "Serve",
     "TakeOut",
     "locate_object",
+    "robot_capacity",
 ]
 
 ALL_SKILLS = (

@@ -17,6 +17,7 @@ from ._model import (
     PlanningTask,
 )
 from ._skills import Draft, action_names, draft
+from ._spots import room_for_robots
 from ._vocabulary import Vocabulary
 
 __all__ = ["build_task"]
@@ -53,6 +54,9 @@ def build_task(
     init = vocab.init()
     names = action_names(drafts)
     actions = {n: action_schema(vocab, d, n) for d, n in zip(drafts, names, strict=True)}
+    robots = {n: d.agent.robot or "" for d, n in zip(drafts, names, strict=True)}
+    actions, spot_facts = room_for_robots(vocab, actions, robots)
+    init |= spot_facts
     goal_lits = tuple(Lit(a.predicate, a.args, a.positive) for a in vocab.goal_atoms)
     return PlanningTask(
         name=name,

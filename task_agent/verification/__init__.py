@@ -20,7 +20,8 @@ Checks (``VerifyProblem.kind``)::
                   a device of another agent; '@step.param' between incompatible types
     resource      two calls that may run at the same time lock the same device (the agent
                   would refuse the second start), or use one agent whose devices for them are
-                  not known
+                  not known, or send two robots to a place that holds one robot (its
+                  ``robotCapacity``: the second would wait at run time)
     precondition  a pre- or hold-condition false when its step starts, in the symbolic
                   simulation, or made false by a parallel branch's effects (which may come
                   first or meanwhile); no candidate satisfying the pre-conditions for an

@@ -12,13 +12,16 @@ from typing import NamedTuple
 
 from skill_agent import WorldView
 from skill_agent.parameters import bindings
+from skill_agent.protocol import RelationCond
+from skill_agent.skills import robot_capacity
 from wm_store import display_name
+from wm_store.ontology import Cls, Rel
 from wm_store.scene import SceneState, id_sort_key
 
 from ..taskfile import CallSite, where
 from ._attempt import Attempt, is_of
 
-__all__ = ["Sharing", "call_locks", "resource_problems", "sharing"]
+__all__ = ["Sharing", "call_locks", "resource_problems", "sharing", "spot_problems", "spots_of"]
 
 
 class Sharing(NamedTuple):
@@ -94,3 +97,50 @@ def _device(lock: str, state: SceneState) -> str:
     if lock.startswith(_AGENT):
         return f"agent {lock[len(_AGENT) :]} (its devices for these calls are not known)"
     return display_name(state.get(lock), lock)
+
+
+def spots_of(att: Attempt, view: WorldView) -> set[tuple[str, str]]:
+    """``(place, robot)`` for each place holding one robot (``robotCapacity`` 1 or absent)
+    that the call sends a robot to: a post-condition ``at(robot, place)``."""
+    values = att.values if att.values is not None else att.given
+    out: set[tuple[str, str]] = set()
+    for cond in att.desc.post:
+        if not (isinstance(cond, RelationCond) and cond.predicate == Rel.at and cond.holds):
+            continue
+        robot, place = values.get(cond.subject), values.get(cond.object)
+        if not (isinstance(robot, str) and isinstance(place, str)):
+            continue
+        if is_of(view, robot, Cls.Robot) and robot_capacity(view, place) == 1:
+            out.add((place, robot))
+    return out
+
+
+def spot_problems(
+    calls: Mapping[str, CallSite], spots: Mapping[str, set[tuple[str, str]]], state: SceneState
+) -> list[tuple[str, str]]:
+    """``(call path, problem)`` for each call that may run at the same time as an earlier one
+    sending another robot to a place that holds one robot (``spots``: each call's
+    :func:`spots_of`)."""
+    out = []
+    for site in calls.values():
+        found = []
+        for place, robot in sorted(spots.get(site.path, set())):
+            for other in site.parallel:
+                if calls[other].order > site.order:
+                    continue
+                rivals = {r for p, r in spots.get(other, set()) if p == place and r != robot}
+                if rivals:
+                    names = ", ".join(_device(r, state) for r in sorted(rivals))
+                    found.append(
+                        f"{where(other, calls[other].call)} (both send a robot to "
+                        f"{_device(place, state)}, which holds one: {_device(robot, state)} "
+                        f"and {names})"
+                    )
+        if found:
+            message = (
+                f"may run at the same time as {'; '.join(found)}: the second robot would wait "
+                "at run time until the first has left; order them in a sequence, send one "
+                "elsewhere, or give the place a larger robotCapacity"
+            )
+            out.append((site.path, message))
+    return out

@@ -23,7 +23,14 @@ from ..protocol import Call, Parallel, TaskFile, VerifyProblem
 from ..taskfile import ROOT_PATH, BlockSite, CallSite, assign_ids, blocks, walk, where
 from ._attempt import Attempt, Earlier, Kind
 from ._call import CallChecker, broken
-from ._resources import Sharing, call_locks, resource_problems, sharing
+from ._resources import (
+    Sharing,
+    call_locks,
+    resource_problems,
+    sharing,
+    spot_problems,
+    spots_of,
+)
 from ._scene import SceneView, changes, clashes, scene_copy
 
 __all__ = ["Report", "StepPrediction", "check", "verify"]
@@ -82,6 +89,8 @@ class _Verifier:
         self.params: dict[str, dict[str, Value]] = {}
         self.locks: dict[str, set[str]] = {}
         self.sharing: dict[str, Sharing] = {}
+        self.spots: dict[str, set[tuple[str, str]]] = {}
+        """Each call's places for one robot it sends a robot to (place, robot)."""
         self.starts: dict[str, tuple[SceneState, Attempt]] = {}
         """The state each call in a parallel block starts in, with its attempt."""
         earlier = Earlier(self.ids, self.calls, self.descs, self.params)
@@ -260,6 +269,7 @@ class _Verifier:
             self.report(site.path, kind, head + message, "warning")
         self.locks[site.path] = call_locks(att, view, fixed=len(found) == 1)
         self.sharing[site.path] = sharing(att, fixed=len(found) == 1)
+        self.spots[site.path] = spots_of(att, view)
         if att.values is None:
             return
         hardware = {p.name for p in att.desc.parameters if p.kind == "hardware"}
@@ -293,6 +303,8 @@ class _Verifier:
 
     def resources(self) -> None:
         for path, message in resource_problems(self.calls, self.locks, self.state, self.sharing):
+            self.report(path, "resource", message)
+        for path, message in spot_problems(self.calls, self.spots, self.state):
             self.report(path, "resource", message)
 
 

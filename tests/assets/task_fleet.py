@@ -7,6 +7,7 @@ Scene (element ids in :class:`Fleet` fields)::
 
     depot (Location)          robots r1..rN at the depot (or where ``start`` says)
     Station-1, Station-2      each: a PartBox (at the station) with gears, a Tray (at it)
+    (the depot is open floor; each station has room for every robot: ``robotCapacity``)
     robot-i contain KitBox-i  each robot carries its kit box
 
 Goals that need both robots: fill each robot's kit (``kit_goal``); goals either robot can
@@ -99,14 +100,17 @@ def _pose(x: float, y: float) -> dict[str, Value]:
     return {"pose": Pose(Position(x, y, 0.0))}
 
 
-async def _scene(wm: WmClient, parts: int) -> dict[str, list[str]]:
+async def _scene(wm: WmClient, parts: int, robots: int) -> dict[str, list[str]]:
     ops: list[Op] = [
         AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0, 0))
     ]
     for s in (1, 2):
         ops += [
             AddElement(
-                type="Station", label=f"station-{s}", ref=f"$s{s}", properties=_pose(2, 2 * s)
+                type="Station",
+                label=f"station-{s}",
+                ref=f"$s{s}",
+                properties={**_pose(2, 2 * s), "robotCapacity": max(robots, 2)},
             ),
             AddElement(
                 type="PartBox",
@@ -158,7 +162,7 @@ async def fleet(
         await tg.start(store.run)
         transport = InMemoryTransport(WmService(store))
         async with WmClient.connect(transport, ontology, author="test") as wm:
-            scene = await _scene(wm, parts)
+            scene = await _scene(wm, parts, robots)
             specs = [
                 SkillSpec(name=c.description.name, skill_type=c.description.family,
                           description=_json.encode(c.description).decode())

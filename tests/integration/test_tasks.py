@@ -144,7 +144,10 @@ async def add_scene(wm: WmClient, robots: list[str]) -> None:
     for s in (1, 2):
         ops.append(
             AddElement(
-                type="Station", label=f"station-{s}", ref=f"$s{s}", properties=pose(2, 2 * s)
+                type="Station",
+                label=f"station-{s}",
+                ref=f"$s{s}",
+                properties={**pose(2, 2 * s), "robotCapacity": 4},  # no geometry: room for all
             )
         )
         for kind, label in (("PartBox", f"box-{s}"), ("Tray", f"tray-{s}")):

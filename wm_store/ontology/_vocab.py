@@ -101,6 +101,8 @@ class Prop:
     partNumber: Final = "partNumber"
     pose: Final = "pose"
     position: Final = "position"
+    reservedBy: Final = "reservedBy"
+    robotCapacity: Final = "robotCapacity"
     seenAt: Final = "seenAt"
     size: Final = "size"
     skillType: Final = "skillType"

@@ -196,17 +196,24 @@ def kitting_scene(
     boxes_per_station: int = 2,
     skills: Sequence[SkillDescription] = (NAVIGATE, PICK, PLACE),
     ontology: Ontology | None = None,
+    station_capacity: int | None = None,
 ) -> KittingScene:
     """``robots`` agents ``r1..rN`` (mobile manipulators with a gripper, a kit box on board,
-    at the depot) and ``parts`` gears spread over part boxes at ``stations`` stations."""
+    at the depot: open floor) and ``parts`` gears spread over part boxes at ``stations``
+    stations, each with room for every robot (``robotCapacity``: nothing is counted) unless
+    ``station_capacity`` says how many robots a station holds."""
     onto = ontology or Ontology.default()
     state = SceneState()
     state.set_spatial_predicates(n for n, r in onto.relations.items() if r.spatial)
+    room = max(robots, 2) if station_capacity is None else station_capacity
     ops: list[Op] = [AddElement(type="Location", label="depot", ref="$depot", properties=_pose(0))]
     for s in range(stations):
         ops.append(
             AddElement(
-                type="Station", label=f"station-{s + 1}", ref=f"$s{s}", properties=_pose(s + 1)
+                type="Station",
+                label=f"station-{s + 1}",
+                ref=f"$s{s}",
+                properties={**_pose(s + 1), "robotCapacity": room},
             )
         )
         for b in range(boxes_per_station):

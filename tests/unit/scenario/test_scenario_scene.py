@@ -17,7 +17,9 @@ pytestmark = pytest.mark.anyio
 
 
 def test_an_unknown_scenario_names_the_known_ones() -> None:
-    with pytest.raises(ScenarioError, match=r"no scenario 'kiting'.*\(kitting, .*meal, workshop\)"):
+    with pytest.raises(
+        ScenarioError, match=r"no scenario 'kiting'.*\(kitting, .*meal, workshop, workshop-shared\)"
+    ):
         read_scenario("kiting")
 
 
