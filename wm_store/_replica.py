@@ -87,7 +87,10 @@ class Replica:
         self.state = SceneState()
         self._spatial = frozenset(n for n, r in self.base_ontology.relations.items() if r.spatial)
         self.state.set_spatial_predicates(self._spatial)
-        self._lock = anyio.Lock()
+        self._lock = anyio.Lock(fast_acquire=True)
+        """Serializes applying the stream with pulls and reloads. Taken without a trip
+        through the loop when free: the change stream yields to the loop often enough, and
+        a trip per change would cost a loop pass per change for every replica."""
         self._waiters: dict[int, anyio.Event] = {}
         """One event per awaited revision, set once the replica reaches it: a writer waiting
         for its revision wakes once, not on every change."""

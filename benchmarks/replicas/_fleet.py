@@ -1,5 +1,10 @@
-"""The measured fleet: one in-memory store, ``robots`` simulated-outcome agents in this process,
-each with a kitting cell, driven in a loop of navigate steps.
+"""The measured fleet: one store, ``robots`` simulated-outcome agents in this process, each with
+a kitting cell, driven in a loop of navigate steps.
+
+The store is in-memory in this process (``transport`` None: every cost on one loop, the
+changes recorded for the replay of :mod:`~benchmarks.replicas._cost`), or ``skimesh wm``'s
+store in another process reached over Zenoh (a :class:`~wm_store.ZenohTransport` given: each
+replica a subscription of its own, the store's work on the other core).
 
 Scene, per robot ``i``: a station (``Station``, with a pose) holding a part box with two gears,
 the robot registered the way ``skimesh agent`` registers it (agent, robot, arm, gripper, base,
@@ -39,7 +44,14 @@ import msgspec
 from skill_agent.protocol import RunEvent, RunResult, StartRun
 from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillEntry
 from skill_agent.skills import Navigate, Pick, Place, Serve
-from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, SkillSpec, WmClient
+from wm_store import (
+    DeviceSpec,
+    InMemoryTransport,
+    RobotRegistration,
+    SkillSpec,
+    WmClient,
+    WmTransport,
+)
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Pose, Position, Relation, SetRelation, Value
 from wm_store.server import WmService, WmStore
@@ -58,7 +70,8 @@ class Agent(msgspec.Struct, kw_only=True):
 
 
 class Fleet(msgspec.Struct, kw_only=True):
-    store: WmStore
+    store: WmStore | None
+    """The in-process store (None: the store is elsewhere)."""
     wm: WmClient
     """The set-up client (its replica also follows the store)."""
     depot: str
@@ -113,15 +126,23 @@ def _registration(i: int) -> RobotRegistration:
 
 @asynccontextmanager
 async def fleet(
-    robots: int, *, replicas: str, time_scale: float, anonymous: bool = False
+    robots: int,
+    *,
+    replicas: str,
+    time_scale: float,
+    anonymous: bool = False,
+    transport: WmTransport | None = None,
 ) -> AsyncIterator[Fleet]:
-    """``robots`` agents with ``replicas`` ``own`` or ``shared`` (see the module doc)."""
+    """``robots`` agents with ``replicas`` ``own`` or ``shared`` (see the module doc), on an
+    empty store: in this process, or the one ``transport`` reaches."""
     ontology = Ontology.default()
-    store = await WmStore.open(ontology)
     async with AsyncExitStack() as stack:
         tg = await stack.enter_async_context(anyio.create_task_group())
-        await tg.start(store.run)
-        transport = InMemoryTransport(WmService(store))
+        store = None
+        if transport is None:
+            store = await WmStore.open(ontology)
+            await tg.start(store.run)
+            transport = InMemoryTransport(WmService(store))
         wm = await stack.enter_async_context(WmClient.connect(transport, ontology, author="set-up"))
         depot_pose: dict[str, Value] = {"pose": Pose(Position(0.0, 0.0, 0.0))}
         ops: list[Op] = [
@@ -163,7 +184,7 @@ async def fleet(
             )
             await tg.start(core.run)
             agents.append(Agent(name=name, core=core, robot=robot, station=ids[f"$s{i}"]))
-        await wm.wait_for_revision(store.revision)
+        await wm.wait_for_revision((await wm.info()).revision)
         yield Fleet(
             store=store,
             wm=wm,
