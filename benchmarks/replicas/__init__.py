@@ -11,9 +11,10 @@ Run with ``python -m benchmarks.replicas [--quick] [--profile] [--json F]``.
   time from start to result minus the simulated sleep), 50 robots against 10, target <= 2x.
 - ``_cost``: the changes of the 50-robot run replayed into one fresh replica: decode, apply
   and index, with a hold-condition listener, and a profile of where the time goes.
-- ``_run``: the runs (repetitions interleaved), the results table, the command line.
+- ``_run``: the runs (repetitions interleaved), the results table, the command line;
+  ``run_case`` (one case) is what ``tests/unit/benchmarks/test_replicas.py`` drives.
 """
 
-from benchmarks.replicas._run import main
+from benchmarks.replicas._run import Case, main, run_case
 
-__all__ = ["main"]
+__all__ = ["Case", "main", "run_case"]

@@ -20,13 +20,13 @@ pytestmark = pytest.mark.anyio
 
 
 @asynccontextmanager
-async def shared(ontology: Ontology) -> AsyncIterator[tuple[WmStore, WmClient]]:
-    store = await WmStore.open(ontology)
-    async with anyio.create_task_group() as tg:
-        await tg.start(store.run)
-        async with WmClient.connect(InMemoryTransport(WmService(store)), ontology) as wm:
-            yield store, wm
-        tg.cancel_scope.cancel()
+async def shared(ontology: Ontology) -> AsyncIterator[WmClient]:
+    """A client (and its replica) of a fresh in-memory store."""
+    async with (
+        running(WmStore(ontology)) as store,
+        WmClient.connect(InMemoryTransport(WmService(store)), ontology) as wm,
+    ):
+        yield wm
 
 
 def _robot(agent: str) -> RobotRegistration:
@@ -39,7 +39,7 @@ def _robot(agent: str) -> RobotRegistration:
 
 
 async def test_agents_share_one_replica_and_write_as_themselves(ontology: Ontology) -> None:
-    async with shared(ontology) as (_store, wm):
+    async with shared(ontology) as wm:
         r1, r2 = wm.with_author("r1"), wm.with_author("r2")
         assert r1.replica is wm.replica and r2.replica is wm.replica
         assert (r1.author, r2.author, wm.author) == ("r1", "r2", "")
@@ -59,7 +59,7 @@ async def test_agents_share_one_replica_and_write_as_themselves(ontology: Ontolo
 
 
 async def test_every_agent_hears_each_change_once(ontology: Ontology) -> None:
-    async with shared(ontology) as (_store, wm):
+    async with shared(ontology) as wm:
         r1, r2 = wm.with_author("r1"), wm.with_author("r2")
         heard: dict[str, list[int]] = {"r1": [], "r2": []}
         off1 = r1.on_change(lambda c: heard["r1"].append(c.revision))
