@@ -20,7 +20,7 @@ station -> depot ... for ``steps`` steps, all robots at once.
   receives, decodes and applies every change: what one ``skimesh agent`` process per robot
   does, here on one event loop (the agents of a 2-core host share its cores either way);
 - ``shared``: the agents share one replica (:meth:`wm_store.WmClient.with_author`), what
-  ``skimesh agent --robot r1 --robot r2 ...`` does.
+  ``run_agent(..., wm=client)`` does for the agents of one process.
 
 ``anonymous``: the agents' step writes name no author, so the store skips its check that no
 agent changes what another registered (:mod:`wm_store.scene._ownership`, whose cost grows
