@@ -7,8 +7,9 @@ Run with ``python -m benchmarks.replicas [--quick] [--profile] [--json F]``.
   simulated-outcome agents on this process's loop, one kitting cell each, every robot driving
   navigate steps at once; the agents each with their own replica (``own``: one ``skimesh
   agent`` process per robot) or sharing one (``shared``: ``run_agent(..., wm=client)``), and
-  an ablation whose writes name no author (the store's agent-ownership check off). Figure: the median step overhead (wall
-  time from start to result minus the simulated sleep), 50 robots against 10, target <= 2x.
+  an ablation whose writes name no author (the store's agent-ownership check off). Figure:
+  the median step overhead (wall time from start to result minus the simulated sleep), 50
+  robots against 10, target <= 2x.
 - ``_cost``: the changes of the 50-robot run replayed into one fresh replica: decode, apply
   and index, with a hold-condition listener, and a profile of where the time goes.
 - ``_run``: the runs (repetitions interleaved), the results table, the command line;
