@@ -86,12 +86,28 @@ class WmClient:
         author: str = "",
         timeout: float = 5.0,
         read_your_writes: bool = True,
+        replica: Replica | None = None,
     ) -> None:
+        """``replica``: read from this replica (kept current by whoever runs it) instead of
+        a new one of this client's own (see :meth:`with_author`)."""
         self.transport = transport
         self.author = author
         self.timeout = timeout
         self.read_your_writes = read_your_writes
-        self.replica = Replica(transport, ontology, timeout=timeout)
+        self.replica = replica or Replica(transport, ontology, timeout=timeout)
+
+    def with_author(self, author: str) -> WmClient:
+        """A client writing as ``author`` that reads from this client's replica: the agents
+        of one process share one replica, so a change is received, decoded and applied once
+        per process, not once per agent. The new client needs no :meth:`connect` of its own;
+        it works while this client's replica runs (its ``connect`` context)."""
+        return WmClient(
+            self.transport,
+            author=author,
+            timeout=self.timeout,
+            read_your_writes=self.read_your_writes,
+            replica=self.replica,
+        )
 
     @classmethod
     @asynccontextmanager

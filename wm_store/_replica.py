@@ -87,7 +87,12 @@ class Replica:
         self.state = SceneState()
         self._spatial = frozenset(n for n, r in self.base_ontology.relations.items() if r.spatial)
         self.state.set_spatial_predicates(self._spatial)
-        self._lock = anyio.Lock()
+        self._lock = anyio.Lock(fast_acquire=True)
+        """Held while a change is pulled or a snapshot reloaded (they await the store); the
+        next change of the stream is applied without it when it is free (:meth:`_next`).
+        Taken without a pass through the loop when free: the change stream yields to the
+        loop often enough, and a pass per change would cost every replica a loop wake-up
+        per change."""
         self._waiters: dict[int, anyio.Event] = {}
         """One event per awaited revision, set once the replica reaches it: a writer waiting
         for its revision wakes once, not on every change."""
@@ -122,6 +127,9 @@ class Replica:
                     if self.check_every > 0:
                         tg.start_soon(self._check_against_store)
                     async for change in stream:
+                        if self._next(change):  # the common case: no await, no loop pass
+                            self._apply(change)
+                            continue
                         async with self._lock:
                             await self._accept(change)
                     tg.cancel_scope.cancel()
@@ -163,6 +171,11 @@ class Replica:
         self.divergences += 1
         _log.warning("the world-model replica diverged from the store (%s); reloading", why)
         await self._load_snapshot()
+
+    def _next(self, change: Change) -> bool:
+        """``change`` follows the replica's revision and no pull or reload is under way: it
+        can be applied at once (applying never awaits, so nothing interleaves with it)."""
+        return change.revision == self.state.revision + 1 and not self._lock.locked()
 
     async def _accept(self, change: Change) -> None:
         if change.revision <= self.state.revision:

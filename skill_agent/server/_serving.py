@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import logging
 import socket
-from collections.abc import Mapping
+from collections.abc import AsyncIterator, Mapping
+from contextlib import asynccontextmanager
 from pathlib import Path
 
 import anyio
@@ -185,6 +186,17 @@ async def teach_terms(wm: WmClient, config: AgentConfig, registry: SkillRegistry
     registry.ontology = wm.ontology
 
 
+@asynccontextmanager
+async def _client(
+    mesh: Mesh, config: AgentConfig, shared: WmClient | None, timeout: float
+) -> AsyncIterator[WmClient]:
+    if shared is not None:
+        yield shared.with_author(config.name)
+        return
+    async with WmClient.connect(ZenohTransport(mesh), author=config.name, timeout=timeout) as wm:
+        yield wm
+
+
 def simulated_outcomes(config: AgentConfig, *, force: bool = False) -> SimulatedOutcomes | None:
     """The config's simulated-outcome settings, or None when the mode is off."""
     sim = config.simulation
@@ -201,19 +213,25 @@ async def run_agent(
     simulate: bool = False,
     drivers: Mapping[str, object] | None = None,
     wm_timeout: float = 5.0,
+    wm: WmClient | None = None,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Everything ``skimesh agent`` does: join the world model, load and check the skills,
     build the core and serve it until cancelled. ``simulate`` forces simulated outcomes.
     ``drivers``: device drivers by world-model label (``driver.name``), bound to the agent's
     devices and hardware bindings by label (see the module doc); None: no drivers.
+    ``wm``: a connected client of this process whose replica the agent shares (it writes as
+    itself through :meth:`~wm_store.WmClient.with_author`): the agents of one process then
+    receive, decode and apply each world-model change once, not once each: ``async with
+    WmClient.connect(ZenohTransport(mesh)) as wm:``, then ``run_agent(..., wm=wm)`` for each
+    agent inside the block (the replica follows the store while it is open); None: a
+    replica of the agent's own.
 
     Raises:
         SkillLoadError: a skill or the config does not load (WiringError: a device label
             names no element). WmError: no world model.
     """
-    transport = ZenohTransport(mesh)
-    async with WmClient.connect(transport, author=config.name, timeout=wm_timeout) as wm:
+    async with _client(mesh, config, wm, wm_timeout) as wm:
         registry = SkillRegistry.from_config(config, wm.ontology, context={"mesh": mesh})
         await teach_terms(wm, config, registry)
         entries = await anyio.to_thread.run_sync(registry.load)
