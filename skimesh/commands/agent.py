@@ -17,6 +17,7 @@ import json
 import logging
 import sys
 from collections.abc import Awaitable, Callable, Sequence
+from contextlib import AsyncExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -27,7 +28,7 @@ from meshlink import Mesh, MeshlinkError, add_mesh_arguments
 from skill_agent import AgentTransportError, SkillError
 from skill_agent.client import AgentClient, find_skills, list_agents
 from skill_agent.protocol import RunEvent, RunResult, SkillDescription
-from wm_store import WmError
+from wm_store import WmClient, WmError, ZenohTransport
 from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
 
@@ -232,20 +233,33 @@ def _serve(args: argparse.Namespace) -> int:
 
     remote = (args.devices or ("none" if args.simulate else "zenoh")) == "zenoh"
 
-    async def serve(mesh: Mesh, config: AgentConfig) -> None:
+    async def serve(mesh: Mesh, config: AgentConfig, wm: WmClient | None) -> None:
         try:
             drivers = await _remote_drivers(mesh, config, args.device_timeout) if remote else None
             await run_agent(
-                mesh, config, simulate=args.simulate, drivers=drivers, wm_timeout=args.timeout
+                mesh,
+                config,
+                simulate=args.simulate,
+                drivers=drivers,
+                wm_timeout=args.timeout,
+                wm=wm,
             )
         except (SkillError, WmError, MeshlinkError) as e:
             raise _AgentFailed(config.name, e) from e
 
     async def main() -> int:
         try:
-            async with mesh_session(args) as mesh, anyio.create_task_group() as tg:
-                for config in configs:
-                    tg.start_soon(serve, mesh, config)
+            async with AsyncExitStack() as stack:
+                mesh = await stack.enter_async_context(mesh_session(args))
+                wm = None
+                if len(configs) > 1:  # the agents of one process share one replica
+                    transport = ZenohTransport(mesh)
+                    wm = await stack.enter_async_context(
+                        WmClient.connect(transport, timeout=args.timeout)
+                    )
+                async with anyio.create_task_group() as tg:
+                    for config in configs:
+                        tg.start_soon(serve, mesh, config, wm)
         except (WmError, MeshlinkError) as e:  # the session itself
             print(f"skimesh agent: {e}", file=sys.stderr)
             return EXIT_UNREACHABLE

@@ -25,6 +25,7 @@ from wm_store._lazy import lazy_getattr
 from ._cardinality import min_cardinality_violations as min_cardinality_violations
 from ._ownership import STRUCTURE as STRUCTURE
 from ._ownership import Ownership as Ownership
+from ._ownership import changes_ownership as changes_ownership
 from ._ownership import check_writer as check_writer
 from ._ownership import ownership as ownership
 from ._query import id_sort_key as id_sort_key
@@ -61,6 +62,7 @@ __all__ = [
     "TxnResult",
     "Undo",
     "apply_transaction",
+    "changes_ownership",
     "check_writer",
     "id_sort_key",
     "match_relations",

@@ -31,7 +31,7 @@ from wm_store.protocol import Delta, ElementPut, ElementRemoved, RelationAdded, 
 
 from ._state import SceneState
 
-__all__ = ["STRUCTURE", "Ownership", "check_writer", "ownership"]
+__all__ = ["STRUCTURE", "Ownership", "changes_ownership", "check_writer", "ownership"]
 
 STRUCTURE = frozenset({"controls", "hasA", "hasSkill"})
 """The relations of a registration: only their owners may add or remove them."""
@@ -140,3 +140,24 @@ def check_writer(
                     refuse(r.subject, f"change {r.predicate} of")
                     if not (r.predicate == "controls" and r.subject == mine):
                         refuse(r.object, f"change {r.predicate} to")
+
+
+def changes_ownership(before: Ownership, deltas: Iterable[Delta], types: frozenset[str]) -> bool:
+    """Whether ``deltas`` may change who owns what (so an :class:`Ownership` made before them
+    is stale): they touch an owned element, add an element of one of ``types`` (agents,
+    devices), tie or untie with a registration relation (:data:`STRUCTURE`), or change the
+    ontology. Most changes (a skill's effects) do not: the store then keeps its map."""
+    for delta in deltas:
+        match delta:
+            case ElementPut(element=e):
+                if e.id in before.owners or e.type in types:
+                    return True
+            case ElementRemoved(id=element_id):
+                if element_id in before.owners:
+                    return True
+            case RelationAdded(relation=r) | RelationRemoved(relation=r):
+                if r.predicate in STRUCTURE:
+                    return True
+            case _:  # classes, templates, terms: the class hierarchy may change
+                return True
+    return False

@@ -46,7 +46,15 @@ from wm_store.protocol import (
     Transact,
     TransactReply,
 )
-from wm_store.scene import SceneState, Undo, apply_transaction, check_writer, ownership
+from wm_store.scene import (
+    Ownership,
+    SceneState,
+    Undo,
+    apply_transaction,
+    changes_ownership,
+    check_writer,
+    ownership,
+)
 
 __all__ = ["ChangeListener", "StoreConfig", "WmStore"]
 
@@ -119,6 +127,8 @@ class WmStore:
         self._failed: StorageError | None = None
         self._snapshot_wanted = anyio.Event()
         self._published_changed = anyio.Event()
+        self._owners: Ownership | None = None
+        """Who owns what (``wm_store.scene.ownership``), kept until a change touches it."""
 
     # ------------------------------------------------------------------ life cycle
 
@@ -230,6 +240,10 @@ class WmStore:
         )
         if not result.deltas:  # nothing changed (e.g. terms the ontology already has)
             return TransactReply(revision=self.state.revision, ids=result.ids)
+        if self._owners is not None:
+            kinds = self.ontology.subclasses("Agent") | self.ontology.subclasses("Device")
+            if changes_ownership(self._owners, result.deltas, kinds):
+                self._owners = None
         self.state.revision = revision
         self.state.digest = chain_digest(self.state.digest, encode(result.deltas))
         self.ontology = result.ontology
@@ -270,7 +284,9 @@ class WmStore:
             return None
         onto = self.ontology
         agent_types = onto.subclasses("Agent")
-        before = ownership(state, agent_types, onto.subclasses("Device"))
+        if self._owners is None:  # made again only after a change to the registrations
+            self._owners = ownership(state, agent_types, onto.subclasses("Device"))
+        before = self._owners
         controllers = self.config.controllers
 
         def check(deltas: list[Delta]) -> None:

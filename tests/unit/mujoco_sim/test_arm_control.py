@@ -143,11 +143,10 @@ async def test_a_joint_move_through_its_own_base_detours_or_is_refused(world: Si
     state = await arm.state()
     assert state.joints["shoulder_pan"] == pytest.approx(1.5, abs=0.01)
     assert min(abs(v) for v in lifts) < 0.2, "it passed the rest posture"
-    t0 = world.snapshot.time
     with pytest.raises(CollisionError, match=r"r1-arm: no collision-free joint move.*r1/base"):
         await arm.move_joints({"shoulder_pan": 0.0, "shoulder_lift": -2.2, "elbow": 0.0})
-    # refused at once: the snapshot's clock moves in 0.1 s ticks, so at most one tick passes
-    assert world.snapshot.time - t0 < 0.15
+    # refused before anything moved (the world's clock runs beside the test, so the time it
+    # took says nothing on a loaded machine; the joints do)
     assert (await arm.state()).joints == pytest.approx(state.joints, abs=2e-3)
 
 

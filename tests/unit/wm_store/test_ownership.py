@@ -111,3 +111,19 @@ async def test_a_split_robot_is_joined_unless_the_store_names_its_controllers() 
         await intruder.wait_for_revision(base.revision)
         with pytest.raises(ForbiddenError, match="controllers setting names r1-arm, r1-base"):
             await intruder.register_robot(registration("r2", "r1", ("camera",)))
+
+
+async def test_the_store_knows_of_a_registration_made_after_its_last_check() -> None:
+    """The store keeps who-owns-what between writes and makes it again after a change to the
+    registrations: a device r1 adds later is r1's at once."""
+    async with site() as s:
+        r1, r2 = await s.client("r1"), await s.client("r2")
+        await r1.register_robot(registration("r1", "robot-1"))
+        await r2.register_robot(registration("r2", "robot-2"))
+        gear = (await r2.transact([AddElement(type="Gear", label="g", ref="$g")])).ids["$g"]
+        await r2.transact([UpdateElement(id=gear, properties={"mass": 0.2})])  # map made, kept
+        ids = await r1.register_robot(registration("r1", "robot-1", ("arm", "camera")))
+        camera = ids["$device:robot-1-camera"]
+        await r2.wait_for_revision(r1.revision)
+        with pytest.raises(ForbiddenError, match="belongs to agent r1"):
+            await r2.transact([UpdateElement(id=camera, properties={"available": False})])
