@@ -161,6 +161,8 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
     operator_fallback: bool = False
     """When a skill fails, ask the operator before replanning."""
     operator_fallback_skills: frozenset[str] = frozenset()
+    priority: int = 0
+    """Among tasks that wait for the same robots or objects, a higher priority goes first."""
     """Ask the operator only when one of these skills fails (by skill name, e.g. ``pick``);
     the others are replanned. Ignored when ``operator_fallback`` is set (every skill)."""
 
@@ -477,6 +479,11 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     """Held by ``PauseTask`` (no new step starts) until ``ResumeTask``."""
     partial: PartialResult | None = None
     """As in :class:`TaskFinished`, once the task has ended."""
+    priority: int = 0
+    claims: list[str] = []
+    """The agents and objects the running task holds (no other task commands them)."""
+    waiting: str = ""
+    """What the task waits for before its steps can start (held by another task)."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

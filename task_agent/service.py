@@ -70,6 +70,7 @@ from ._errors import RequestError, TaskError, VerificationError
 from ._goal_text import parse_goal
 from ._goals import Goal, check_goal
 from ._physics import NO_SIMULATOR, check_goal_facts
+from .claims import ClaimBook
 from .discovery import Discovery
 from .execution import (
     MAX_TASK_EVENTS,
@@ -193,6 +194,9 @@ class TaskService:
         self.keep_finished = keep_finished
         self.abort_wait = abort_wait
         self._tasks: OrderedDict[str, tuple[Executor, anyio.Event]] = OrderedDict()
+        self.claims = ClaimBook()
+        """What each running task holds: two tasks never command one robot or act on one
+        object at once; a task that needs what another holds waits (priority first)."""
         self._tg: TaskGroup | None = None
         self.rpc: RequestHandler[TaskRequest, TaskReply] = RequestHandler(
             TaskRequest,
@@ -309,6 +313,7 @@ class TaskService:
             operator_agent=self.operator_agent,
             verify=self.verify,
             max_events=self.max_events,
+            claims=self.claims,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:

@@ -57,6 +57,7 @@ from wm_store import display_name
 from .._errors import DomainError, PlanningError, UnsolvableError
 from .._goals import Goal, GoalLiteral
 from .._physics import fact_text
+from ..claims import ClaimBook
 from ..discovery import AgentInfo, Discovery
 from ..planning import PartialOrderPlan, Plan, to_partial_order
 from ..protocol import (
@@ -75,6 +76,7 @@ from ..protocol import (
     TaskResumed,
     TaskStarted,
 )
+from ._claiming import claim_of, free_agents
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
@@ -131,8 +133,14 @@ class Executor:
         writes: RunWrites | None = None,
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
+        claims: ClaimBook | None = None,
     ) -> None:
         self.task_id = task_id
+        self.claims = claims
+        """The task service's claims: this task holds its agents and objects while it runs
+        and waits for those another task holds (None: no other task shares the site)."""
+        self.waiting = ""
+        """What the task waits for before its steps can start ("" when it waits for none)."""
         self.verify = verify
         self.check: GoalCheck | None = None
         """The goal's facts checked after success (``verify``), once there."""
@@ -229,7 +237,30 @@ class Executor:
             check=self.check,
             paused=self.paused and self.outcome == "running",
             partial=self.partial,
+            priority=self.options.priority,
+            claims=sorted(self._held()),
+            waiting=self.waiting if self.outcome == "running" else "",
         )
+
+    def _held(self) -> set[str]:
+        claim = self.claims.claim_of(self.task_id) if self.claims is not None else None
+        return set() if claim is None else set(claim.agents) | set(claim.objects)
+
+    async def _claim(self, steps: list[StepSpec]) -> None:
+        """Hold what ``steps`` need before they run, waiting (``waiting`` says for what) while
+        other tasks hold any of it (:mod:`task_agent.claims`)."""
+        if self.claims is None:
+            return
+        agents, objects = claim_of(steps, self.discovery.agents(include_unavailable=True), self.wm)
+        held_agents, held_objects = self.claims.busy(self.task_id)
+        blocked = sorted((agents & held_agents) | (objects & held_objects))
+        if blocked:
+            self.waiting = f"{', '.join(blocked)} (held by another task)"
+            _log.info("task %s waits for %s", self.task_id, self.waiting)
+        try:
+            await self.claims.acquire(self.task_id, agents, objects, priority=self.options.priority)
+        finally:
+            self.waiting = ""
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
         """Plan and run until ``goal`` holds (or fails, is unsolvable or aborted)."""
@@ -251,6 +282,8 @@ class Executor:
             with self._scope:
                 outcome, message = await body()
         except anyio.get_cancelled_exc_class():
+            if self.claims is not None:
+                self.claims.release(self.task_id)
             self._finish("aborted", "the task agent stopped")
             raise
         except Exception as e:  # a bug must not leave the task "running" forever
@@ -260,6 +293,8 @@ class Executor:
             outcome, message = "aborted", self._abort_reason
         if outcome in ("partial", "failed", "aborted"):
             await self._safe_state()
+        if self.claims is not None:
+            self.claims.release(self.task_id)
         return self._finish(outcome, message)
 
     async def _safe_state(self) -> None:
@@ -317,6 +352,7 @@ class Executor:
                 continue
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
+            await self._claim(steps)
             failure = await self.steps.run(steps)
             if failure is None:
                 await self._catch_up()
@@ -420,13 +456,22 @@ class Executor:
         await self._catch_up()
         await self._await_agents()
         started = time.perf_counter()
-        try:
-            plan = await self.planner.plan(self._agents(excluded), self.wm, goal)
+        busy = self.claims.busy(self.task_id)[0] if self.claims is not None else frozenset()
+        agents = self._agents(excluded)
+        free = free_agents(agents, busy)
+        try:  # around what other tasks hold first, else with it (and wait for it: _claim)
+            plan = await self.planner.plan(free if busy else agents, self.wm, goal)
         except UnsolvableError:
-            if not excluded:
+            if busy:
+                _log.info(
+                    "task %s: no plan without %s (busy); trying with them", self.task_id, busy
+                )
+                plan = await self.planner.plan(agents, self.wm, goal)
+            elif excluded:
+                _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
+                plan = await self.planner.plan(self._agents(set()), self.wm, goal)
+            else:
                 raise
-            _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
-            plan = await self.planner.plan(self._agents(set()), self.wm, goal)
         order = await anyio.to_thread.run_sync(to_partial_order, plan)
         seconds = time.perf_counter() - started
         steps = self._steps_of(order)
@@ -509,6 +554,7 @@ class Executor:
             makespan=max((s.finish for s in steps), default=0.0),
             sequential=sum(s.finish - s.start for s in steps),
         )
+        await self._claim(steps)
         failure: StepOutcome | None = await self.steps.run(steps)
         if failure is not None:
             return "failed", str(failure)
