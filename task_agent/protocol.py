@@ -367,6 +367,10 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     duration: float = 0.0
     check: GoalCheck | None = None
     """A succeeded goal task: each goal fact in the world model and in the physics."""
+    estimated_makespan: float | None = None
+    """The first plan's makespan, s (None: nothing was planned)."""
+    actual_makespan: float | None = None
+    """From the first plan to the end of the task's last step, s (the task agent's clock)."""
 
 
 class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
@@ -418,6 +422,10 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     """As in :class:`TaskFinished`, once the task has ended."""
     paused: bool = False
     """Held by ``PauseTask`` (no new step starts) until ``ResumeTask``."""
+    estimated_makespan: float | None = None
+    """As in :class:`TaskFinished` (the first plan's makespan, once planned)."""
+    actual_makespan: float | None = None
+    """As in :class:`TaskFinished`, once the task has ended."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

@@ -31,9 +31,10 @@ Every event is kept in :attr:`Executor.history` (bounded: :mod:`._history`).
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from typing import Protocol
 
 import anyio
@@ -45,6 +46,7 @@ from wm_store import display_name
 from .._errors import DomainError, PlanningError, UnsolvableError
 from .._goals import Goal
 from ..discovery import AgentInfo, Discovery
+from ..learning import DurationBook, FailedStep, TaskLearning
 from ..planning import Plan, to_partial_order
 from ..protocol import (
     GoalCheck,
@@ -92,7 +94,14 @@ class PlanSource(Protocol):
     @property
     def engine(self) -> str: ...
 
-    async def plan(self, agents: Sequence[AgentInfo], view: WorldView, goal: Goal) -> Plan: ...
+    async def plan(
+        self,
+        agents: Sequence[AgentInfo],
+        view: WorldView,
+        goal: Goal,
+        *,
+        exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
+    ) -> Plan: ...
 
 
 class Executor:
@@ -115,8 +124,11 @@ class Executor:
         writes: RunWrites | None = None,
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
+        durations: DurationBook | None = None,
     ) -> None:
         self.task_id = task_id
+        self.learning = TaskLearning(durations or DurationBook(), wm)
+        """The learning hook: run times into ``durations``, failed steps, makespans."""
         self.verify = verify
         self.check: GoalCheck | None = None
         """The goal's facts checked after success (``verify``), once there."""
@@ -130,7 +142,7 @@ class Executor:
         liveliness token vanish for a few seconds)."""
         self.history = EventHistory(max_events)
         """The task's events so far (at most ``max_events``)."""
-        self.events = EventSink(task_id, publish, self.history)
+        self.events = EventSink(task_id, _observed(publish, self.learning), self.history)
         self.steps = StepScheduler(
             events=self.events,
             runner=runner,
@@ -202,6 +214,7 @@ class Executor:
             message=self.message,
             check=self.check,
             paused=self.paused and self.outcome == "running",
+            **self._makespans(),
         )
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
@@ -231,6 +244,8 @@ class Executor:
             message = f"internal error: {type(e).__name__}: {e}"
         if self._scope.cancelled_caught:
             outcome, message = "aborted", self._abort_reason
+        with anyio.CancelScope(shield=True), anyio.move_on_after(self.wm_timeout):
+            await self.learning.save()
         return self._finish(outcome, message)
 
     def _finish(self, outcome: TaskOutcome, message: str) -> TaskFinished:
@@ -247,6 +262,18 @@ class Executor:
             replans=self.replans,
             duration=self.finished_at - self.started_at,
             check=self.check,
+            **self._makespans(),
+        )
+
+    def _makespans(self) -> dict[str, float]:
+        found = self.learning.makespans()
+        if found is None:
+            return {}
+        estimated = {"estimated_makespan": found.estimated}
+        return (
+            estimated
+            if self.outcome == "running"
+            else {**estimated, "actual_makespan": found.actual}
         )
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
@@ -260,6 +287,8 @@ class Executor:
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
                     return "unsolvable", str(e)
+                if self.learning.lessons.failed:
+                    return "failed", self._nothing_left(goal)
                 return "failed", f"replanning found no plan: {e}"
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
@@ -273,6 +302,9 @@ class Executor:
                 reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
             else:
                 reason = str(failure)
+                learned = await self._learn(failure)
+                if learned is not None:
+                    reason = f"{reason}; the next plan avoids this step"
                 if failure.reason in EXCLUDED_REASONS:
                     excluded.add((failure.agent, failure.skill))
             if attempt >= self.options.max_replans:
@@ -290,14 +322,18 @@ class Executor:
             while not self.discovery.agents():
                 await self.discovery.wait_changed()
         started = time.perf_counter()
+        failed = self.learning.excluded()
         try:
-            plan = await self.planner.plan(self._agents(excluded), self.wm, goal)
+            plan = await self.planner.plan(self._agents(excluded), self.wm, goal, exclude=failed)
         except UnsolvableError:
             if not excluded:
                 raise
             _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
-            plan = await self.planner.plan(self._agents(set()), self.wm, goal)
-        order = await anyio.to_thread.run_sync(to_partial_order, plan)
+            plan = await self.planner.plan(self._agents(set()), self.wm, goal, exclude=failed)
+        timing = self.learning.timer(plan.task.objects)
+        order = await anyio.to_thread.run_sync(
+            functools.partial(to_partial_order, plan, timing=timing)
+        )
         seconds = time.perf_counter() - started
         steps = self._number(steps_from_plan(order, self._next_step))
         self.events.emit(
@@ -311,6 +347,32 @@ class Executor:
             sequential=order.sequential,
         )
         return steps
+
+    async def _learn(self, failure: StepOutcome) -> FailedStep | None:
+        """The learning hook for a failed step: kept with the state it failed in."""
+        await self._catch_up()
+        agent = next(
+            (a for a in self.discovery.agents(include_unavailable=True) if a.name == failure.agent),
+            None,
+        )
+        hardware = agent.hardware if agent is not None else ()
+        return self.learning.failed(
+            failure.agent,
+            failure.skill,
+            failure.params,
+            failure.reason,
+            failure.message,
+            hardware=hardware,
+        )
+
+    def _nothing_left(self, goal: Goal) -> str:
+        """Why the task ends after its failed steps, in words (labels, no action names)."""
+
+        def name(element: str) -> str:
+            found = self.wm.find_element(element)
+            return display_name(found) if found is not None else element
+
+        return self.learning.lessons.explain(unmet_goal(goal, self.wm), name)
 
     def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
         agents = self.discovery.agents()
@@ -375,3 +437,15 @@ class Executor:
                 self.steps.effects_revision,
                 self.wm_timeout,
             )
+
+
+def _observed(
+    publish: Callable[[TaskEvent], None], learning: TaskLearning
+) -> Callable[[TaskEvent], None]:
+    """``publish``, after ``learning`` saw the event (run times, makespans)."""
+
+    def both(event: TaskEvent) -> None:
+        learning.observe(event)
+        publish(event)
+
+    return both

@@ -1,0 +1,111 @@
+"""One task's learning: :class:`TaskLearning`, the executor's hook.
+
+It follows the task's events (:meth:`TaskLearning.observe`: the executor hands it each event
+as it publishes it): every step that succeeded adds its run time (``StepStarted`` to
+``StepFinished``, on the task agent's clock; its distance when it drives) to the shared
+:class:`DurationBook`; the first plan's makespan is the task's estimate, and the time from
+that plan to the end of its last step the actual makespan (replans, their planning and their
+steps included). A failed step becomes a :class:`Lessons` entry (:meth:`TaskLearning.failed`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable, Mapping
+
+import anyio
+import msgspec
+
+from skill_agent import WorldView
+
+from ..protocol import Planned, StepFinished, StepStarted, TaskEvent
+from ._durations import DurationBook
+from ._lessons import FailedStep, Lessons
+from ._timing import StepTimer, positions, route
+
+__all__ = ["Makespans", "TaskLearning"]
+
+
+class Makespans(msgspec.Struct, frozen=True, kw_only=True):
+    estimated: float
+    """The first plan's makespan, s."""
+    actual: float
+    """From the first plan to the end of the task's last step, s."""
+
+
+class _Started(msgspec.Struct, frozen=True):
+    stamp: float
+    agent: str
+    skill: str
+    metres: float | None
+
+
+class TaskLearning:
+    """What one task feeds into the learned knowledge and takes from it (module doc)."""
+
+    def __init__(self, book: DurationBook, view: WorldView) -> None:
+        self.book = book
+        self.view = view
+        self.lessons = Lessons()
+        self.estimated: float | None = None
+        self._planned_at = 0.0
+        self._last_end = 0.0
+        self._started: dict[int, _Started] = {}
+
+    # ------------------------------------------------------------------ planning
+
+    def timer(self, objects: Iterable[str]) -> StepTimer:
+        """Step estimates for a plan over ``objects`` (reads poses: call on the loop)."""
+        return StepTimer(self.book, positions(self.view, objects))
+
+    def failed(
+        self,
+        agent: str,
+        skill: str,
+        params: Mapping[str, object],
+        reason: str,
+        cause: str,
+        *,
+        hardware: Collection[str] = (),
+    ) -> FailedStep | None:
+        """Learn from a failed step (call once the world model shows its effects)."""
+        return self.lessons.learn(self.view, agent, skill, params, reason, cause, hardware=hardware)
+
+    def excluded(self) -> list[tuple[str, str, Mapping[str, object]]]:
+        """The failed steps the next plan must not contain (see :class:`Lessons`)."""
+        return self.lessons.excluded(self.view)
+
+    # ------------------------------------------------------------------ events
+
+    def observe(self, event: TaskEvent) -> None:
+        match event:
+            case Planned() if self.estimated is None:
+                self.estimated, self._planned_at = event.makespan, event.stamp
+            case StepStarted():
+                where = positions(
+                    self.view, [v for v in event.params.values() if isinstance(v, str)]
+                )
+                metres = route(where, event.params)
+                self._started[event.step] = _Started(event.stamp, event.agent, event.skill, metres)
+            case StepFinished():
+                began = self._started.pop(event.step, None)
+                if began is None:
+                    return
+                self._last_end = max(self._last_end, event.stamp)
+                if event.success and not event.by_operator and began.agent == event.agent:
+                    self.book.record(
+                        began.agent, began.skill, event.stamp - began.stamp, began.metres
+                    )
+            case _:
+                pass
+
+    def makespans(self) -> Makespans | None:
+        """Estimated and actual makespan (None before the first plan)."""
+        if self.estimated is None:
+            return None
+        actual = max(self._last_end - self._planned_at, 0.0)
+        return Makespans(estimated=self.estimated, actual=actual)
+
+    async def save(self) -> None:
+        """Keep the book (its file, in a worker thread)."""
+        if self.book.path is not None:
+            await anyio.to_thread.run_sync(self.book.save, self.book.snapshot())
