@@ -1,3 +1,3 @@
 """The project's benchmarks, one sub-package each (``python -m benchmarks.<name>``: ``wm``,
-``skills``, ``sim``, ``planning``), the shared helpers (``common``) and the A/B comparison of two
-checkouts (``ab``). Method and results: ``docs/benchmarks.md``."""
+``skills``, ``sim``, ``planning``, ``cli``, ``estimates``), the shared helpers (``common``)
+and the A/B comparison of two checkouts (``ab``). Method and results: ``docs/benchmarks.md``."""

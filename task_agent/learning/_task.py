@@ -1,9 +1,12 @@
 """One task's learning: :class:`TaskLearning`, the executor's hook.
 
 It follows the task's events (:meth:`TaskLearning.observe`: the executor hands it each event
-as it publishes it): every step that succeeded adds its run time (``StepStarted`` to
-``StepFinished``, on the task agent's clock; its distance when it drives) to the shared
-:class:`DurationBook`; the first plan's makespan is the task's estimate, and the time from
+as it publishes it): every step that succeeded adds its time to the shared
+:class:`DurationBook` (its distance too when it drives): from the moment it could start (its
+plan was made, or its last predecessor finished) to its ``StepFinished``, on the task agent's
+clock. That is the time the schedule has to allow for it: the run, and the start before it
+(the request, the agent's pre-sensing and pre-condition check), which a run's own clock
+leaves out; the first plan's makespan is the task's estimate, and the time from
 that plan to the end of its last step the actual makespan (replans, their planning and their
 steps included). A failed step becomes a :class:`Lessons` entry (:meth:`TaskLearning.failed`).
 """
@@ -50,6 +53,10 @@ class TaskLearning:
         self._planned_at = 0.0
         self._last_end = 0.0
         self._started: dict[int, _Started] = {}
+        self._after: dict[int, tuple[int, ...]] = {}
+        self._planned: dict[int, float] = {}
+        """Step -> when its plan was made."""
+        self._ended: dict[int, float] = {}
 
     # ------------------------------------------------------------------ planning
 
@@ -78,8 +85,12 @@ class TaskLearning:
 
     def observe(self, event: TaskEvent) -> None:
         match event:
-            case Planned() if self.estimated is None:
-                self.estimated, self._planned_at = event.makespan, event.stamp
+            case Planned():
+                if self.estimated is None:
+                    self.estimated, self._planned_at = event.makespan, event.stamp
+                for step in event.steps:
+                    self._after[step.index] = tuple(step.after)
+                    self._planned[step.index] = event.stamp
             case StepStarted():
                 where = positions(
                     self.view, [v for v in event.params.values() if isinstance(v, str)]
@@ -88,13 +99,16 @@ class TaskLearning:
                 self._started[event.step] = _Started(event.stamp, event.agent, event.skill, metres)
             case StepFinished():
                 began = self._started.pop(event.step, None)
+                self._ended[event.step] = event.stamp
                 if began is None:
                     return
                 self._last_end = max(self._last_end, event.stamp)
                 if event.success and not event.by_operator and began.agent == event.agent:
-                    self.book.record(
-                        began.agent, began.skill, event.stamp - began.stamp, began.metres
+                    ready = max(
+                        (self._ended.get(p, 0.0) for p in self._after.get(event.step, ())),
+                        default=self._planned.get(event.step, began.stamp),
                     )
+                    self.book.record(began.agent, began.skill, event.stamp - ready, began.metres)
             case _:
                 pass
 
