@@ -21,6 +21,8 @@ from skimesh.demo import MissionView, StackOptions, agent_configs, demo_stack, r
 from task_agent import parse_goal
 from task_agent.protocol import StepFinished, StepStarted, TaskEvent, TaskOptions
 
+from ._allocation import SLOWER, Allocated, allocation
+
 __all__ = ["Measured", "main", "measure"]
 
 SCENARIOS = ("kitting", "workshop")
@@ -161,16 +163,40 @@ def table(results: Sequence[Measured]) -> str:
     return format_grid(head, body)
 
 
+def allocation_table(rows: Sequence[Allocated]) -> str:
+    head = ["durations", "r1 (slow) steps, busy s", "r2 steps, busy s", "makespan s",
+            "busy/robots s", "estimated s"]  # fmt: skip
+    body = [
+        [
+            r.durations,
+            f"{r.steps.get('r1', 0)}, {fmt_num(r.busy.get('r1', 0.0))}",
+            f"{r.steps.get('r2', 0)}, {fmt_num(r.busy.get('r2', 0.0))}",
+            fmt_num(r.actual),
+            fmt_num(r.busy_share),
+            fmt_num(r.estimated),
+        ]
+        for r in rows
+    ]
+    return format_grid(head, body)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks.estimates", description=__doc__)
     p.add_argument("--scenario", action="append", help=f"default: {', '.join(SCENARIOS)}")
     p.add_argument("--runs", type=int, default=2, help="runs per scenario, the first a warm-up")
     p.add_argument("--json", type=Path, help="write the results as JSON here")
+    p.add_argument("--no-missions", action="store_true", help="the allocation part only")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
-    results = anyio.run(measure, args.scenario or list(SCENARIOS), args.runs)
-    print(table(results))
+    allocated = anyio.run(allocation)
+    print(f"allocation, r1 {SLOWER:g}x slower than r2 (in-process fleet, simulated outcomes):")
+    print(allocation_table(allocated))
+    results = [] if args.no_missions else anyio.run(measure, args.scenario or SCENARIOS, args.runs)
+    if results:
+        print(table(results))
     if args.json:
-        args.json.write_bytes(msgspec.json.encode(results))
+        args.json.write_bytes(msgspec.json.encode({"missions": results, "allocation": allocated}))
+    if args.no_missions:
+        return 0
     later = [m for m in results if m.run > 0]
     return 0 if later and all(abs(m.error) <= 0.25 for m in later) else 1

@@ -355,15 +355,7 @@ class Executor:
             (a for a in self.discovery.agents(include_unavailable=True) if a.name == failure.agent),
             None,
         )
-        hardware = agent.hardware if agent is not None else ()
-        return self.learning.failed(
-            failure.agent,
-            failure.skill,
-            failure.params,
-            failure.reason,
-            failure.message,
-            hardware=hardware,
-        )
+        return self.learning.failed(failure, hardware=agent.hardware if agent else ())
 
     def _nothing_left(self, goal: Goal) -> str:
         """Why the task ends after its failed steps, in words (labels, no action names)."""

@@ -20,6 +20,7 @@ Pure and light: no planner import. The code: ``_durations``, ``_timing``, ``_les
 from ._durations import DurationBook as DurationBook
 from ._durations import SkillTime as SkillTime
 from ._lessons import NOT_LEARNED as NOT_LEARNED
+from ._lessons import FailedRun as FailedRun
 from ._lessons import FailedStep as FailedStep
 from ._lessons import Lessons as Lessons
 from ._task import Makespans as Makespans
@@ -29,6 +30,7 @@ from ._timing import StepTimer as StepTimer
 __all__ = [
     "NOT_LEARNED",
     "DurationBook",
+    "FailedRun",
     "FailedStep",
     "Lessons",
     "Makespans",

@@ -18,12 +18,13 @@ fact that does not hold, and each step that failed, with the robot and the cause
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Iterable, Mapping
+from typing import Protocol
 
 import msgspec
 
 from skill_agent import WorldView
 
-__all__ = ["NOT_LEARNED", "FailedStep", "Lessons", "state_of"]
+__all__ = ["NOT_LEARNED", "FailedRun", "FailedStep", "Lessons", "state_of"]
 
 NOT_LEARNED = frozenset({"stopped", "agent_lost", "preempted", "unavailable", "dataflow"})
 """Step outcome reasons that say nothing about the step itself."""
@@ -31,6 +32,21 @@ MOVING = frozenset({"pose", "position"})
 """Properties left out of a step's state: where a thing is carried is not what it is."""
 
 _encode = msgspec.json.Encoder(order="sorted").encode
+
+
+class FailedRun(Protocol):
+    """A step's failure as the executor reports it (``StepOutcome`` is one)."""
+
+    @property
+    def agent(self) -> str: ...
+    @property
+    def skill(self) -> str: ...
+    @property
+    def params(self) -> Mapping[str, object]: ...
+    @property
+    def reason(self) -> str: ...
+    @property
+    def message(self) -> str: ...
 
 
 def state_of(view: WorldView, elements: Iterable[str]) -> bytes:
@@ -75,28 +91,21 @@ class Lessons:
         self.failed: list[FailedStep] = []
 
     def learn(
-        self,
-        view: WorldView,
-        agent: str,
-        skill: str,
-        params: Mapping[str, object],
-        reason: str,
-        cause: str,
-        *,
-        hardware: Collection[str] = (),
+        self, view: WorldView, run: FailedRun, *, hardware: Collection[str] = ()
     ) -> FailedStep | None:
-        """Keep this failure (None if its reason says nothing about the step). A step that
-        failed before on other things' state replaces that entry."""
-        if reason in NOT_LEARNED or not agent or reason == "ok":
+        """Keep this failure (None if its reason says nothing about the step), with the state
+        of its things in ``view``; ``hardware``: its robot's (left out of that state). A step
+        that failed before on other things' state replaces that entry."""
+        if run.reason in NOT_LEARNED or not run.agent or run.reason == "ok":
             return None
-        elements = {k: v for k, v in params.items() if isinstance(v, str) and v}
+        elements = {k: v for k, v in run.params.items() if isinstance(v, str) and v}
         things = tuple(sorted({v for v in elements.values() if v not in hardware}))
         step = FailedStep(
-            agent=agent,
-            skill=skill,
+            agent=run.agent,
+            skill=run.skill,
             params=elements,
-            reason=reason,
-            cause=cause.strip() or "no message",
+            reason=run.reason,
+            cause=run.message.strip() or "no message",
             things=things,
             state=state_of(view, things),
         )
@@ -117,5 +126,6 @@ class Lessons:
             return f"no plan reaches {goal}"
         tried = "; ".join(f.text(name) for f in self.failed)
         return (
-            f"nothing left to try for {goal}: every plan needs a step that failed. Tried: {tried}"
+            f"nothing left to try for {goal}: no plan with the robots available reaches it "
+            f"without a step that failed. Tried: {tried}"
         )

@@ -22,7 +22,7 @@ from skill_agent import WorldView
 
 from ..protocol import Planned, StepFinished, StepStarted, TaskEvent
 from ._durations import DurationBook
-from ._lessons import FailedStep, Lessons
+from ._lessons import FailedRun, FailedStep, Lessons
 from ._timing import StepTimer, positions, route
 
 __all__ = ["Makespans", "TaskLearning"]
@@ -64,18 +64,9 @@ class TaskLearning:
         """Step estimates for a plan over ``objects`` (reads poses: call on the loop)."""
         return StepTimer(self.book, positions(self.view, objects))
 
-    def failed(
-        self,
-        agent: str,
-        skill: str,
-        params: Mapping[str, object],
-        reason: str,
-        cause: str,
-        *,
-        hardware: Collection[str] = (),
-    ) -> FailedStep | None:
+    def failed(self, run: FailedRun, *, hardware: Collection[str] = ()) -> FailedStep | None:
         """Learn from a failed step (call once the world model shows its effects)."""
-        return self.lessons.learn(self.view, agent, skill, params, reason, cause, hardware=hardware)
+        return self.lessons.learn(self.view, run, hardware=hardware)
 
     def excluded(self) -> list[tuple[str, str, Mapping[str, object]]]:
         """The failed steps the next plan must not contain (see :class:`Lessons`)."""

@@ -20,7 +20,9 @@ Allocation (``balance=True``): the planner picks an agent for each step, not a b
 Greedy list scheduling then re-linearizes the steps by start time and revisits them in that
 order, moving a step to another agent offering the same skill when the step is interchangeable
 there (the same skill parameters, re-bound to that agent's hardware, and the whole plan still
-replays from the world model's state to the goal) and the makespan shrinks; it repeats until
+replays from the world model's state to the goal) and the makespan shrinks; the later steps of
+the same agent that use what the step leaves on its hardware (a part in its gripper) move with
+it; it repeats until
 no move helps. A move is only tried when the other agent's own load plus the step is below the
 makespan (otherwise it cannot help); the loads and the moved step's duration come from the
 same timing, so learned durations balance the work. The steps come out in that start-time
@@ -290,6 +292,34 @@ def _valid_from(task: PlanningTask, state: State, steps: Sequence[PlanStep]) -> 
     return not unmet_goals(task, state)
 
 
+def _moved(
+    task: PlanningTask,
+    steps: Sequence[PlanStep],
+    effects: Sequence[StepEffects],
+    k: int,
+    alt: PlanStep,
+    timing: StepTiming | None,
+) -> list[PlanStep] | None:
+    """``steps`` with step ``k`` replaced by ``alt`` and, with it, the later steps of the
+    same agent that use what step ``k`` left on that agent's hardware (the part a pick put in
+    its gripper, which only that gripper can place); None if one of them cannot move."""
+    out = list(steps)
+    out[k] = alt
+    agent = steps[k].agent
+    schema = task.actions.get(steps[k].action)
+    own = set(schema.bound.values()) if schema is not None else set()
+    held = {f for f in effects[k].adds if own & set(f[1])}
+    for j in range(k + 1, len(steps)):
+        if not held or steps[j].agent != agent or not effects[j].reads & held:
+            continue
+        rebound = [a for a in _alternatives(task, steps[j], timing) if a.agent == alt.agent]
+        if not rebound:
+            return None
+        out[j] = rebound[0]
+        held |= {f for f in effects[j].adds if own & set(f[1])}
+    return out
+
+
 def _balance(
     task: PlanningTask, steps: list[PlanStep], rounds: int, timing: StepTiming | None
 ) -> PartialOrderPlan:
@@ -306,6 +336,7 @@ def _balance(
         for s in steps:
             load[s.agent] = load.get(s.agent, 0.0) + s.duration
         states: list[State] | None = None
+        effects: list[StepEffects] | None = None
         moved = False
         for k in range(len(steps)):
             candidates = []
@@ -316,9 +347,10 @@ def _balance(
                 states = states or _states(task, steps)
                 if unmet(task, alt.ground, states[k]):
                     continue
-                if not _valid_from(task, states[k].copy(), [alt, *steps[k + 1 :]]):
+                effects = effects or replay(task, [s.ground for s in steps])[0]
+                trial = _moved(task, steps, effects, k, alt, timing)
+                if trial is None or not _valid_from(task, states[k].copy(), trial[k:]):
                     continue
-                trial = [*steps[:k], alt, *steps[k + 1 :]]
                 schedule = _schedule(task, trial)
                 if schedule.makespan < best.makespan - 1e-9:
                     candidates.append((schedule.makespan, alt.agent, trial, schedule))
