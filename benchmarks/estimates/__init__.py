@@ -8,6 +8,10 @@ estimated from what the runs before it learned. Per run: the task's estimated an
 makespan (``TaskFinished``, on the task agent's clock), the error, and the balance of the work
 (the parallel makespan against the robots' total busy time divided by the robots; busy time
 from the step events). The same-run baseline is the warm-up's estimate, made without learning.
+By default the world steps as fast as it can, so its pace (and every duration on the task
+agent's clock) follows the machine's load from run to run; ``--realtime`` paces it to the
+clock, as a site's robots are. ``_allocation`` adds an in-process case: one robot three times
+slower than the other, the measured task allocated with and without the learned durations.
 
 ``_run`` holds the whole benchmark: the runs, the rows, the command line.
 """

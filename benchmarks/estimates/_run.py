@@ -81,13 +81,14 @@ class _View(MissionView):
         super().__call__(event)
 
 
-async def _one(name: str, run: int, work: Path, durations: Path) -> Measured:
+async def _one(name: str, run: int, work: Path, durations: Path, fast: bool) -> Measured:
     scenario = load_scenario(scenario_file(name))
     options = StackOptions(
         scenario=scenario,
         agents=agent_configs(scenario),
         data_dir=work / f"{name}-{run}",
         durations=durations,
+        fast=fast,
     )
     async with demo_stack(options, None, say=lambda _: None) as stack:
         goal = parse_goal(mission_goal(scenario), stack.wm)
@@ -119,15 +120,18 @@ async def _one(name: str, run: int, work: Path, durations: Path) -> Measured:
     )
 
 
-async def measure(scenarios: Sequence[str], runs: int, say: object = print) -> list[Measured]:
-    """Every scenario's mission ``runs`` times (see the package docstring)."""
+async def measure(
+    scenarios: Sequence[str], runs: int, fast: bool = True, say: object = print
+) -> list[Measured]:
+    """Every scenario's mission ``runs`` times (see the package docstring); ``fast``: the
+    world steps as fast as it can (else in real time)."""
     out: list[Measured] = []
     with tempfile.TemporaryDirectory(prefix="skimesh-estimates-") as tmp:
         work = Path(tmp)
         for name in scenarios:
             durations = work / f"{name}-durations.json"
             for run in range(runs):
-                m = await _one(name, run, work, durations)
+                m = await _one(name, run, work, durations, fast)
                 out.append(m)
                 if callable(say):
                     say(_line(m))
@@ -186,12 +190,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--runs", type=int, default=2, help="runs per scenario, the first a warm-up")
     p.add_argument("--json", type=Path, help="write the results as JSON here")
     p.add_argument("--no-missions", action="store_true", help="the allocation part only")
+    p.add_argument(
+        "--realtime", action="store_true", help="the world steps in real time (default: fast)"
+    )
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
     allocated = anyio.run(allocation)
     print(f"allocation, r1 {SLOWER:g}x slower than r2 (in-process fleet, simulated outcomes):")
     print(allocation_table(allocated))
-    results = [] if args.no_missions else anyio.run(measure, args.scenario or SCENARIOS, args.runs)
+    scenarios = args.scenario or SCENARIOS
+    results = (
+        [] if args.no_missions else anyio.run(measure, scenarios, args.runs, not args.realtime)
+    )
     if results:
         print(table(results))
     if args.json:

@@ -172,12 +172,12 @@ def info_lines(info: TaskInfo) -> list[str]:
 
 
 def makespan_lines(estimated: float | None, actual: float | None) -> list[str]:
-    """``  makespan: estimated 29.0 s, actual 31.2 s (+7.6 %)`` (nothing before a plan)."""
+    """``  makespan: estimated 29.0 s, actual 31.2 s (error -7%)`` (nothing before a plan)."""
     if estimated is None:
         return []
     if actual is None:
         return [f"  makespan: estimated {estimated:.1f} s"]
-    error = f" ({(estimated - actual) / actual:+.1%} off)" if actual > 0 else ""
+    error = f" (error {(estimated - actual) / actual:+.0%})" if actual > 0 else ""
     return [f"  makespan: estimated {estimated:.1f} s, actual {actual:.1f} s{error}"]
 
 

@@ -20,6 +20,14 @@ A **task file** (hand-written sequence / parallel blocks, verified by the servic
 here) runs as written; a failed step fails the task (there is no goal to plan towards), unless
 the operator takes the step over (semi-autonomy, see ``_steps``).
 
+Learning (:mod:`task_agent.learning`, :attr:`Executor.learning`): every event passes the
+task's :class:`~task_agent.learning.TaskLearning` before it is published (run times into the
+shared :class:`~task_agent.learning.DurationBook`, saved when the task ends; estimated and
+actual makespan on ``TaskFinished`` / ``TaskInfo``); plans are timed from the book; a failed
+step is kept with its cause and the state of its things, and later plans exclude it while that
+state holds, so no step fails the same way twice in a task; with nothing else left the task
+ends saying which step failed on which robot and why.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
 ``StepProgress`` / ``StepFinished``, ``Replanning``, one ``TaskFinished``.
 :meth:`Executor.abort` stops every run of the task (each agent brings its robot to a safe
