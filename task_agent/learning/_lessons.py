@@ -80,7 +80,9 @@ class FailedStep(msgspec.Struct, frozen=True, kw_only=True):
         return self.agent, self.skill, tuple(sorted(self.params.items()))
 
     def text(self, name: Callable[[str], str] = str) -> str:
-        args = ", ".join(f"{k}={name(v)}" for k, v in self.params.items())
+        """``pick(object=..., holder=...) on r1 failed (execution): <cause>`` (the robot's own
+        hardware left out of the parameters: the agent names the robot)."""
+        args = ", ".join(f"{k}={name(v)}" for k, v in self.params.items() if v in self.things)
         return f"{self.skill}({args}) on {self.agent} failed ({self.reason}): {self.cause}"
 
 
