@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+import anyio
 import msgspec
 import pytest
 
@@ -19,7 +20,16 @@ from task_agent.execution import CoreRunner, Executor, StepOutcome
 from task_agent.execution._runners import OnEvent, OnStarted
 from task_agent.learning import DurationBook, Lessons
 from task_agent.planning import exclude_steps, to_partial_order
-from task_agent.protocol import Planned, Replanning, StepStarted
+from task_agent.protocol import (
+    Planned,
+    Replanning,
+    StepStarted,
+    SubmitGoal,
+    TaskFinished,
+    TasksReply,
+    TaskStatus,
+)
+from task_agent.service import TaskService
 from tests.assets.task_fleet import PLANNER, Fleet, fleet
 from wm_store.protocol import UpdateElement
 
@@ -234,3 +244,41 @@ async def test_the_schedule_and_the_allocation_use_the_timing() -> None:
         for robot, own in steps.items():  # each part's pick and serve on one robot
             picked = {s.params["object"] for s in own if s.skill == "pick"}
             assert picked == {s.params["object"] for s in own if s.skill == "serve"}, robot
+
+
+async def test_the_task_service_shares_and_keeps_the_book(tmp_path: Path) -> None:
+    """Every task of a service learns into one book, kept in its file when a task ends; a
+    service started on that file (a restart) plans with it; ``TaskStatus`` gives the
+    estimated and the actual makespan."""
+    path = tmp_path / "durations.json"
+    async with fleet(start={"r1": 1, "r2": 2}, time_scale=0.02) as f:
+        estimates = []
+        for n, parts in enumerate(((0, 1), (2, 3))):
+            tasks = TaskService(
+                wm=f.wm,
+                discovery=f.discovery,
+                runner=f.runner,
+                publish=f.publish,
+                planners=lambda _options: PLANNER,
+                durations=DurationBook.load(path),
+            )
+            async with anyio.create_task_group() as tg:
+                await tg.start(tasks.run)
+                await tasks.handle(SubmitGoal(goal=f.tray_goal(*parts), task_id=f"t-{n}"))
+                with anyio.fail_after(10):
+                    while not any(
+                        isinstance(e, TaskFinished) and e.task_id == f"t-{n}" for e in f.events
+                    ):
+                        await f.changed.wait()
+                reply = await tasks.handle(TaskStatus(task_id=f"t-{n}"))
+                tg.cancel_scope.cancel()
+            assert isinstance(reply, TasksReply)
+            (info,) = reply.tasks
+            assert info.outcome == "succeeded", info.message
+            assert info.estimated_makespan is not None and info.actual_makespan is not None
+            estimates.append((info.estimated_makespan, info.actual_makespan))
+            kept = DurationBook.load(path)
+            assert kept.samples("r1", "pick") + kept.samples("r2", "pick") == 2 * (n + 1)
+        (first, _), (second, actual) = estimates
+        assert first > 10 * second  # descriptions (seconds) against learned (milliseconds)
+        assert second == pytest.approx(actual, rel=0.5, abs=0.05)
