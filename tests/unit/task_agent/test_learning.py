@@ -29,7 +29,6 @@ from task_agent.protocol import (
     TasksReply,
     TaskStatus,
 )
-from task_agent.service import TaskService
 from tests.assets.task_fleet import PLANNER, Fleet, fleet
 from wm_store.protocol import UpdateElement
 
@@ -254,14 +253,7 @@ async def test_the_task_service_shares_and_keeps_the_book(tmp_path: Path) -> Non
     async with fleet(start={"r1": 1, "r2": 2}, time_scale=0.02) as f:
         estimates = []
         for n, parts in enumerate(((0, 1), (2, 3))):
-            tasks = TaskService(
-                wm=f.wm,
-                discovery=f.discovery,
-                runner=f.runner,
-                publish=f.publish,
-                planners=lambda _options: PLANNER,
-                durations=DurationBook.load(path),
-            )
+            tasks = f.service(durations=DurationBook.load(path))
             async with anyio.create_task_group() as tg:
                 await tg.start(tasks.run)
                 await tasks.handle(SubmitGoal(goal=f.tray_goal(*parts), task_id=f"t-{n}"))
