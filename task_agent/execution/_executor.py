@@ -54,7 +54,7 @@ from wm_store import display_name
 from .._errors import DomainError, PlanningError, UnsolvableError
 from .._goals import Goal
 from ..discovery import AgentInfo, Discovery
-from ..learning import DurationBook, FailedStep, TaskLearning
+from ..learning import DurationBook, FailedStep, TaskLearning, changed_params
 from ..planning import Plan, to_partial_order
 from ..protocol import (
     GoalCheck,
@@ -363,7 +363,11 @@ class Executor:
             (a for a in self.discovery.agents(include_unavailable=True) if a.name == failure.agent),
             None,
         )
-        return self.learning.failed(failure, hardware=agent.hardware if agent else ())
+        if agent is None:
+            return self.learning.failed(failure)
+        skill = agent.skill(failure.skill)
+        changes = changed_params(skill) if skill is not None else frozenset()
+        return self.learning.failed(failure, hardware=agent.hardware, changes=changes)
 
     def _nothing_left(self, goal: Goal) -> str:
         """Why the task ends after its failed steps, in words (labels, no action names)."""

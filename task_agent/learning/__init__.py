@@ -23,6 +23,7 @@ from ._lessons import NOT_LEARNED as NOT_LEARNED
 from ._lessons import FailedRun as FailedRun
 from ._lessons import FailedStep as FailedStep
 from ._lessons import Lessons as Lessons
+from ._lessons import changed_params as changed_params
 from ._task import Makespans as Makespans
 from ._task import TaskLearning as TaskLearning
 from ._timing import StepTimer as StepTimer
@@ -37,4 +38,5 @@ __all__ = [
     "SkillTime",
     "StepTimer",
     "TaskLearning",
+    "changed_params",
 ]

@@ -2,8 +2,10 @@
 
 Each failed step (its agent, skill and parameters: one grounding) is kept with its reason,
 the physical cause the skill reported (the run's message: "shoulder_lift ... blocked, or
-overloaded?") and the state of the things it worked on: the world model's facts about each
-parameter that is not the robot's own hardware (properties but poses, relations either way).
+overloaded?") and the state of the things it worked on: the world model's facts (properties
+but poses, relations either way) about each parameter its post-conditions name
+(:func:`changed_params`: a place's object and container, not the station it stood at, whose
+relations change whenever a robot comes or goes) that is not the robot's own hardware.
 The executor plans again without every grounding whose things are still in that state
 (:func:`task_agent.planning.exclude_steps`): run again on the same things in the same state,
 it would fail the same way, so one task never does that twice. Once the world model says
@@ -23,8 +25,9 @@ from typing import Protocol
 import msgspec
 
 from skill_agent import WorldView
+from skill_agent.protocol import Condition, SkillDescription
 
-__all__ = ["NOT_LEARNED", "FailedRun", "FailedStep", "Lessons", "state_of"]
+__all__ = ["NOT_LEARNED", "FailedRun", "FailedStep", "Lessons", "changed_params", "state_of"]
 
 NOT_LEARNED = frozenset({"stopped", "agent_lost", "preempted", "unavailable", "dataflow"})
 """Step outcome reasons that say nothing about the step itself."""
@@ -47,6 +50,25 @@ class FailedRun(Protocol):
     def reason(self) -> str: ...
     @property
     def message(self) -> str: ...
+
+
+def changed_params(description: SkillDescription) -> frozenset[str]:
+    """The parameters a skill's post-conditions name (what it changes)."""
+    names = {p.name for p in description.parameters}
+    found: set[str] = set()
+
+    def walk(cond: Condition) -> None:
+        for attr in ("subject", "object", "param"):
+            value = getattr(cond, attr, None)
+            if isinstance(value, str) and value in names:
+                found.add(value)
+        for inner in [*getattr(cond, "items", ()), getattr(cond, "item", None)]:
+            if inner is not None:
+                walk(inner)
+
+    for cond in description.post:
+        walk(cond)
+    return frozenset(found)
 
 
 def state_of(view: WorldView, elements: Iterable[str]) -> bytes:
@@ -75,6 +97,8 @@ class FailedStep(msgspec.Struct, frozen=True, kw_only=True):
     """The parameters' elements that are not the robot's hardware."""
     state: bytes = b""
     """:func:`state_of` those things when it failed."""
+    shown: tuple[str, ...] = ()
+    """The parameters' elements a person is told (all but the robot's hardware)."""
 
     def key(self) -> tuple[str, str, tuple[tuple[str, str], ...]]:
         return self.agent, self.skill, tuple(sorted(self.params.items()))
@@ -82,7 +106,7 @@ class FailedStep(msgspec.Struct, frozen=True, kw_only=True):
     def text(self, name: Callable[[str], str] = str) -> str:
         """``pick(object=..., holder=...) on r1 failed (execution): <cause>`` (the robot's own
         hardware left out of the parameters: the agent names the robot)."""
-        args = ", ".join(f"{k}={name(v)}" for k, v in self.params.items() if v in self.things)
+        args = ", ".join(f"{k}={name(v)}" for k, v in self.params.items() if v in self.shown)
         return f"{self.skill}({args}) on {self.agent} failed ({self.reason}): {self.cause}"
 
 
@@ -93,15 +117,21 @@ class Lessons:
         self.failed: list[FailedStep] = []
 
     def learn(
-        self, view: WorldView, run: FailedRun, *, hardware: Collection[str] = ()
+        self,
+        view: WorldView,
+        run: FailedRun,
+        *,
+        hardware: Collection[str] = (),
+        changes: Collection[str] = (),
     ) -> FailedStep | None:
         """Keep this failure (None if its reason says nothing about the step), with the state
-        of its things in ``view``; ``hardware``: its robot's (left out of that state). A step
-        that failed before on other things' state replaces that entry."""
+        of its things in ``view``: the parameters in ``changes`` (all when empty) but the
+        robot's ``hardware``. A step that failed before in another state replaces that entry."""
         if run.reason in NOT_LEARNED or not run.agent or run.reason == "ok":
             return None
         elements = {k: v for k, v in run.params.items() if isinstance(v, str) and v}
-        things = tuple(sorted({v for v in elements.values() if v not in hardware}))
+        named = {v for k, v in elements.items() if not changes or k in changes}
+        things = tuple(sorted(named - set(hardware)))
         step = FailedStep(
             agent=run.agent,
             skill=run.skill,
@@ -110,6 +140,7 @@ class Lessons:
             cause=run.message.strip() or "no message",
             things=things,
             state=state_of(view, things),
+            shown=tuple(sorted(set(elements.values()) - set(hardware))),
         )
         self.failed = [f for f in self.failed if f.key() != step.key()] + [step]
         return step

@@ -64,9 +64,12 @@ class TaskLearning:
         """Step estimates for a plan over ``objects`` (reads poses: call on the loop)."""
         return StepTimer(self.book, positions(self.view, objects))
 
-    def failed(self, run: FailedRun, *, hardware: Collection[str] = ()) -> FailedStep | None:
-        """Learn from a failed step (call once the world model shows its effects)."""
-        return self.lessons.learn(self.view, run, hardware=hardware)
+    def failed(
+        self, run: FailedRun, *, hardware: Collection[str] = (), changes: Collection[str] = ()
+    ) -> FailedStep | None:
+        """Learn from a failed step (call once the world model shows its effects; see
+        :meth:`Lessons.learn`)."""
+        return self.lessons.learn(self.view, run, hardware=hardware, changes=changes)
 
     def excluded(self) -> list[tuple[str, str, Mapping[str, object]]]:
         """The failed steps the next plan must not contain (see :class:`Lessons`)."""

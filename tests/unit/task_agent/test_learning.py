@@ -14,11 +14,12 @@ import msgspec
 import pytest
 
 from skill_agent.protocol import RunResult, RunStarted, StartRun
+from skill_agent.skills import Pick
 from task_agent import parse_goal
 from task_agent.discovery import agents_from_view
 from task_agent.execution import CoreRunner, Executor, StepOutcome
 from task_agent.execution._runners import OnEvent, OnStarted
-from task_agent.learning import DurationBook, Lessons
+from task_agent.learning import DurationBook, Lessons, changed_params
 from task_agent.planning import exclude_steps, to_partial_order
 from task_agent.protocol import (
     Planned,
@@ -30,7 +31,7 @@ from task_agent.protocol import (
     TaskStatus,
 )
 from tests.assets.task_fleet import PLANNER, Fleet, fleet
-from wm_store.protocol import UpdateElement
+from wm_store.protocol import SetRelation, UnsetRelation, UpdateElement
 
 pytestmark = pytest.mark.anyio
 
@@ -134,6 +135,21 @@ async def test_a_failed_step_may_run_again_once_its_things_changed() -> None:
         await f.wm.transact([UpdateElement(id=f.robots[0], properties={"mass": 50.0})])
         assert lessons.excluded(f.wm) == [("r1", "pick", params)]
         await f.wm.transact([UpdateElement(id=f.parts[0], properties={"mass": 0.05})])
+        assert lessons.excluded(f.wm) == []
+        # what a pick changes is its object (and gripper): a robot coming to the station does not
+        # lift the ban, the part's new state does
+        assert changed_params(Pick.description) == {"object", "gripper"}
+        at_station = msgspec.structs.replace(run, params={**params, "location": f.stations[1]})
+        lessons.learn(f.wm, at_station, hardware={f.robots[0]}, changes={"object", "gripper"})
+        (was,) = f.wm.query_relation(subject=f.robots[1], predicate="at")
+        await f.wm.transact(
+            [
+                UnsetRelation(subject=f.robots[1], predicate="at", object=was.object),
+                SetRelation(subject=f.robots[1], predicate="at", object=f.stations[1]),
+            ]
+        )
+        assert len(lessons.excluded(f.wm)) == 1
+        await f.wm.transact([UpdateElement(id=f.parts[0], properties={"mass": 0.07})])
         assert lessons.excluded(f.wm) == []
         stopped = msgspec.structs.replace(run, reason="stopped")
         assert lessons.learn(f.wm, stopped) is None
@@ -274,3 +290,19 @@ async def test_the_task_service_shares_and_keeps_the_book(tmp_path: Path) -> Non
         (first, _), (second, actual) = estimates
         assert first > 10 * second  # descriptions (seconds) against learned (milliseconds)
         assert second == pytest.approx(actual, rel=0.5, abs=0.05)
+
+
+async def test_a_ban_names_what_the_step_changes_not_where_it_stood() -> None:
+    """A failed serve is banned over its object and tray (what its effects name), not its
+    location: serving that part onto that tray is not tried again from elsewhere."""
+    async with fleet(start={"r1": 1}) as f:
+        goal = parse_goal(f.tray_goal(0), f.wm)
+        task = (await PLANNER.plan(agents_from_view(f.wm), f.wm, goal)).task
+        serve = next(a for a in task.actions.values() if a.agent == "r1" and a.skill == "serve")
+        params = {n: f"{n}-x" for n, _ in serve.params}
+        banned = exclude_steps(task, [("r1", "serve", params)])
+        (lit,) = [lit for lit in banned.actions[serve.name].pre if lit.pred.startswith("learned")]
+        assert [n for n, _ in serve.params] == ["object", "tray", "location"]
+        assert not lit.positive and set(lit.args) == {"?object", "?tray"}
+        (fact,) = [f for f in banned.init if f[0] == lit.pred]
+        assert sorted(fact[1]) == ["object-x", "tray-x"]
