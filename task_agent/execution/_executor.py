@@ -54,7 +54,7 @@ from wm_store import display_name
 from .._errors import DomainError, PlanningError, UnsolvableError
 from .._goals import Goal
 from ..discovery import AgentInfo, Discovery
-from ..learning import DurationBook, FailedStep, TaskLearning, changed_params
+from ..learning import DurationBook, FailedStep, TaskLearning
 from ..planning import Plan, to_partial_order
 from ..protocol import (
     GoalCheck,
@@ -222,7 +222,7 @@ class Executor:
             message=self.message,
             check=self.check,
             paused=self.paused and self.outcome == "running",
-            **self._makespans(),
+            **self.learning.makespan_fields(ended=self.outcome != "running"),
         )
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
@@ -270,18 +270,7 @@ class Executor:
             replans=self.replans,
             duration=self.finished_at - self.started_at,
             check=self.check,
-            **self._makespans(),
-        )
-
-    def _makespans(self) -> dict[str, float]:
-        found = self.learning.makespans()
-        if found is None:
-            return {}
-        estimated = {"estimated_makespan": found.estimated}
-        return (
-            estimated
-            if self.outcome == "running"
-            else {**estimated, "actual_makespan": found.actual}
+            **self.learning.makespan_fields(ended=True),
         )
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
@@ -296,7 +285,7 @@ class Executor:
                 if attempt == 0:
                     return "unsolvable", str(e)
                 if self.learning.lessons.failed:
-                    return "failed", self._nothing_left(goal)
+                    return "failed", self.learning.nothing_left(unmet_goal(goal, self.wm))
                 return "failed", f"replanning found no plan: {e}"
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
@@ -359,24 +348,10 @@ class Executor:
     async def _learn(self, failure: StepOutcome) -> FailedStep | None:
         """The learning hook for a failed step: kept with the state it failed in."""
         await self._catch_up()
-        agent = next(
-            (a for a in self.discovery.agents(include_unavailable=True) if a.name == failure.agent),
-            None,
+        agents = self.discovery.agents(include_unavailable=True)
+        return self.learning.failed(
+            failure, next((a for a in agents if a.name == failure.agent), None)
         )
-        if agent is None:
-            return self.learning.failed(failure)
-        skill = agent.skill(failure.skill)
-        changes = changed_params(skill) if skill is not None else frozenset()
-        return self.learning.failed(failure, hardware=agent.hardware, changes=changes)
-
-    def _nothing_left(self, goal: Goal) -> str:
-        """Why the task ends after its failed steps, in words (labels, no action names)."""
-
-        def name(element: str) -> str:
-            found = self.wm.find_element(element)
-            return display_name(found) if found is not None else element
-
-        return self.learning.lessons.explain(unmet_goal(goal, self.wm), name)
 
     def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
         agents = self.discovery.agents()

@@ -13,16 +13,18 @@ steps included). A failed step becomes a :class:`Lessons` entry (:meth:`TaskLear
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 
 import anyio
 import msgspec
 
 from skill_agent import WorldView
+from wm_store import display_name
 
+from ..discovery import AgentInfo
 from ..protocol import Planned, StepFinished, StepStarted, TaskEvent
 from ._durations import DurationBook
-from ._lessons import FailedRun, FailedStep, Lessons
+from ._lessons import FailedRun, FailedStep, Lessons, changed_params
 from ._timing import StepTimer, positions, route
 
 __all__ = ["Makespans", "TaskLearning"]
@@ -64,12 +66,24 @@ class TaskLearning:
         """Step estimates for a plan over ``objects`` (reads poses: call on the loop)."""
         return StepTimer(self.book, positions(self.view, objects))
 
-    def failed(
-        self, run: FailedRun, *, hardware: Collection[str] = (), changes: Collection[str] = ()
-    ) -> FailedStep | None:
-        """Learn from a failed step (call once the world model shows its effects; see
-        :meth:`Lessons.learn`)."""
-        return self.lessons.learn(self.view, run, hardware=hardware, changes=changes)
+    def failed(self, run: FailedRun, agent: AgentInfo | None) -> FailedStep | None:
+        """Learn from a step that failed on ``agent`` (call once the world model shows its
+        effects): the things it changes are its skill's post-conditions' parameters but the
+        agent's hardware (see :class:`Lessons`)."""
+        if agent is None:
+            return self.lessons.learn(self.view, run)
+        skill = agent.skill(run.skill)
+        changes = changed_params(skill) if skill is not None else frozenset()
+        return self.lessons.learn(self.view, run, hardware=agent.hardware, changes=changes)
+
+    def nothing_left(self, unmet: list[str]) -> str:
+        """Why the task ends after its failed steps, in words (labels, no action names)."""
+
+        def name(element: str) -> str:
+            found = self.view.find_element(element)
+            return display_name(found) if found is not None else element
+
+        return self.lessons.explain(unmet, name)
 
     def excluded(self) -> list[tuple[str, str, Mapping[str, object]]]:
         """The failed steps the next plan must not contain (see :class:`Lessons`)."""
@@ -112,6 +126,16 @@ class TaskLearning:
             return None
         actual = max(self._last_end - self._planned_at, 0.0)
         return Makespans(estimated=self.estimated, actual=actual)
+
+    def makespan_fields(self, *, ended: bool) -> dict[str, float]:
+        """``estimated_makespan`` (once planned) and, once ``ended``, ``actual_makespan``:
+        the fields of ``TaskInfo`` / ``TaskFinished``."""
+        found = self.makespans()
+        if found is None:
+            return {}
+        if not ended:
+            return {"estimated_makespan": found.estimated}
+        return {"estimated_makespan": found.estimated, "actual_makespan": found.actual}
 
     async def save(self) -> None:
         """Keep the book (its file, in a worker thread)."""
