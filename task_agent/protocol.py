@@ -425,6 +425,10 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
     """A succeeded goal task: each goal fact in the world model and in the physics."""
     partial: PartialResult | None = None
     """A task that lost an agent and could not reach every goal fact without it."""
+    estimated_makespan: float | None = None
+    """The first plan's makespan, s (None: nothing was planned)."""
+    actual_makespan: float | None = None
+    """From the first plan to the end of the task's last step, s (the task agent's clock)."""
 
 
 class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
@@ -484,6 +488,10 @@ class TaskInfo(Struct, frozen=True, kw_only=True):
     """The agents and objects the running task holds (no other task commands them)."""
     waiting: str = ""
     """What the task waits for before its steps can start (held by another task)."""
+    estimated_makespan: float | None = None
+    """As in :class:`TaskFinished` (the first plan's makespan, once planned)."""
+    actual_makespan: float | None = None
+    """As in :class:`TaskFinished`, once the task has ended."""
 
 
 class TaskAccepted(Struct, tag=True, tag_field="reply", frozen=True, kw_only=True):

@@ -49,6 +49,7 @@ import logging
 import uuid
 from collections import OrderedDict
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 
 import anyio
 from anyio.abc import TaskGroup, TaskStatus
@@ -82,6 +83,7 @@ from .execution import (
     WorldModel,
     ZenohRunner,
 )
+from .learning import DurationBook
 from .operator import serve_operator
 from .protocol import (
     READ_REQUESTS,
@@ -178,8 +180,11 @@ class TaskService:
         max_request_bytes: int = DEFAULT_MAX_REQUEST_BYTES,
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
+        durations: DurationBook | None = None,
     ) -> None:
         self.wm = wm
+        self.durations = durations or DurationBook()
+        """Learned run times, shared by every task (:mod:`task_agent.learning`)."""
         self.max_events = max_events
         """Events kept per task (for ``TaskHistory``)."""
         self.verify = verify or functools.partial(_world_model_only, wm)
@@ -314,6 +319,7 @@ class TaskService:
             verify=self.verify,
             max_events=self.max_events,
             claims=self.claims,
+            durations=self.durations,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:
@@ -386,13 +392,15 @@ async def serve_tasks(
     planners: PlannerFactory | None = None,
     operator: str | None = "operator",
     grace: float = 15.0,
+    durations: Path | str | None = None,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Serve the task agent on ``mesh`` until cancelled; with ``operator`` (a name), also the
     operator agent (:func:`~task_agent.operator.serve_operator`). ``started`` once
     ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped).
     ``grace``: seconds agents whose tokens vanished together (a lost router, a partition)
-    stay unknown, their runs followed on, before they are lost (:class:`Discovery`)."""
+    stay unknown, their runs followed on, before they are lost (:class:`Discovery`).
+    ``durations``: the file the learned run times are kept in (default: in memory)."""
     keys = mesh.keys
     discovery = Discovery(wm, grace=grace)
 
@@ -416,6 +424,7 @@ async def serve_tasks(
         operator_agent=operator or "",
         writes=writes,
         verify=mesh_verifier(mesh, wm),
+        durations=await anyio.to_thread.run_sync(DurationBook.load, durations),
     )
 
     async with anyio.create_task_group() as tg:

@@ -126,6 +126,13 @@ class ProgressPrinter:
         ]
         for agent in sorted(self.count):
             lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
+        lines += makespan_lines(event.estimated_makespan, event.actual_makespan)
+        if self.busy and event.actual_makespan:
+            share = sum(self.busy.values()) / len(self.busy)
+            lines.append(
+                f"  balance: busy {share:.1f} s per robot on average ({len(self.busy)} robots) "
+                f"in a makespan of {event.actual_makespan:.1f} s"
+            )
         if event.message:
             lines.append(f"  {event.message}")
         return lines + partial_lines(event.partial) + check_lines(event.check)
@@ -185,10 +192,21 @@ def info_lines(info: TaskInfo) -> list[str]:
         f"{info.task_id}  {state}  {info.goal or info.name}",
         f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
         f"{info.replans} replans",
+        *makespan_lines(info.estimated_makespan, info.actual_makespan),
         *([f"  {info.message}"] if info.message else []),
         *partial_lines(info.partial),
         *check_lines(info.check),
     ]
+
+
+def makespan_lines(estimated: float | None, actual: float | None) -> list[str]:
+    """``  makespan: estimated 29.0 s, actual 31.2 s (error -7%)`` (nothing before a plan)."""
+    if estimated is None:
+        return []
+    if actual is None:
+        return [f"  makespan: estimated {estimated:.1f} s"]
+    error = f" (error {(estimated - actual) / actual:+.0%})" if actual > 0 else ""
+    return [f"  makespan: estimated {estimated:.1f} s, actual {actual:.1f} s{error}"]
 
 
 def _physics(physics: bool | None, detail: str) -> tuple[str, str]:

@@ -108,6 +108,13 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="serve no operator agent (no step can fall back to a person)",
     )
+    agent.add_argument(
+        "--durations",
+        type=Path,
+        metavar="FILE",
+        help="keep the learned run times of every (robot, skill) in this JSON file, across "
+        "restarts (default: learned in memory only)",
+    )
     agent.set_defaults(func=_serve)
 
     task = sub.add_parser("task", help="submit, follow, list and abort tasks")
@@ -314,7 +321,9 @@ def _serve(args: argparse.Namespace) -> int:
                 ) as wm,
             ):
                 operator = None if args.no_operator else args.operator
-                await serve_tasks(mesh, wm, operator=operator, grace=args.grace)
+                await serve_tasks(  # until cancelled
+                    mesh, wm, operator=operator, grace=args.grace, durations=args.durations
+                )
         except (WmError, MeshlinkError) as e:
             print(f"skimesh task-agent: {e}", file=sys.stderr)
             return exit_code(e)

@@ -68,6 +68,8 @@ class StackOptions:
     mesh: str = "demo"
     port: int = 0
     """Router port on 127.0.0.1 (0: a free one)."""
+    durations: Path | None = None
+    """The task agent's learned run times file (None: in memory)."""
 
 
 @dataclass(kw_only=True)
@@ -144,7 +146,10 @@ async def _agent(
 
 
 async def _task_agent(
-    config: MeshConfig, *, task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED
+    config: MeshConfig,
+    durations: Path | None = None,
+    *,
+    task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     from task_agent.service import serve_tasks  # slow to import (docs/benchmarks.md, Planning)
 
@@ -152,7 +157,7 @@ async def _task_agent(
         open_mesh(config) as mesh,
         WmClient.connect(ZenohTransport(mesh), author="task-agent") as wm,
     ):
-        await serve_tasks(mesh, wm, operator=None, task_status=task_status)
+        await serve_tasks(mesh, wm, operator=None, durations=durations, task_status=task_status)
 
 
 def _quietly(fn: Callable[[], SimWorld]) -> SimWorld:
@@ -234,7 +239,7 @@ async def demo_stack(
         for name, agent in agents.items():
             await stack.enter_async_context(background(_agent, client, agent, drivers))
             say(f"skill agent {name}: {_agent_line(agent, drivers)}")
-        await stack.enter_async_context(background(_task_agent, client))
+        await stack.enter_async_context(background(_task_agent, client, options.durations))
         say("task agent: discovery, planning (Kairos), execution")
         yield Stack(
             endpoint=endpoint,

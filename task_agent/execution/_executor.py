@@ -31,6 +31,14 @@ failed while such an outage lasted does not leave its skill out of later plans.
 A task that ends unfinished (``partial``, ``failed``, ``aborted``) then runs the **safe-state
 phase** (:class:`~task_agent.execution.SafeStatePhase`): its robots put down what they hold.
 
+Learning (:mod:`task_agent.learning`, :attr:`Executor.learning`): every event passes the
+task's :class:`~task_agent.learning.TaskLearning` before it is published (run times into the
+shared :class:`~task_agent.learning.DurationBook`, saved when the task ends; estimated and
+actual makespan on ``TaskFinished`` / ``TaskInfo``); plans are timed from the book; a failed
+step is kept with its cause and the state of its things, and later plans exclude it while that
+state holds, so no step fails the same way twice in a task; with nothing else left the task
+ends saying which step failed on which robot and why.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
 ``StepProgress`` / ``StepFinished``, ``Replanning``, ``SafeState`` (after an unfinished
 ending), one ``TaskFinished``.
@@ -43,9 +51,10 @@ Every event is kept in :attr:`Executor.history` (bounded: :mod:`._history`).
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from typing import Protocol
 
 import anyio
@@ -59,6 +68,7 @@ from .._goals import Goal, GoalLiteral
 from .._physics import fact_text
 from ..claims import ClaimBook
 from ..discovery import AgentInfo, Discovery
+from ..learning import DurationBook, FailedStep, TaskLearning
 from ..planning import PartialOrderPlan, Plan, to_partial_order
 from ..protocol import (
     GoalCheck,
@@ -110,7 +120,14 @@ class PlanSource(Protocol):
     @property
     def engine(self) -> str: ...
 
-    async def plan(self, agents: Sequence[AgentInfo], view: WorldView, goal: Goal) -> Plan: ...
+    async def plan(
+        self,
+        agents: Sequence[AgentInfo],
+        view: WorldView,
+        goal: Goal,
+        *,
+        exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
+    ) -> Plan: ...
 
 
 class Executor:
@@ -134,6 +151,7 @@ class Executor:
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
         claims: ClaimBook | None = None,
+        durations: DurationBook | None = None,
     ) -> None:
         self.task_id = task_id
         self.claims = claims
@@ -141,6 +159,8 @@ class Executor:
         and waits for those another task holds (None: no other task shares the site)."""
         self.waiting = ""
         """What the task waits for before its steps can start ("" when it waits for none)."""
+        self.learning = TaskLearning(durations or DurationBook(), wm)
+        """The learning hook: run times into ``durations``, failed steps, makespans."""
         self.verify = verify
         self.check: GoalCheck | None = None
         """The goal's facts checked after success (``verify``), once there."""
@@ -154,7 +174,7 @@ class Executor:
         liveliness token vanish for a few seconds)."""
         self.history = EventHistory(max_events)
         """The task's events so far (at most ``max_events``)."""
-        self.events = EventSink(task_id, publish, self.history)
+        self.events = EventSink(task_id, _observed(publish, self.learning), self.history)
         self.steps = StepScheduler(
             events=self.events,
             runner=runner,
@@ -240,6 +260,7 @@ class Executor:
             priority=self.options.priority,
             claims=sorted(self._held()),
             waiting=self.waiting if self.outcome == "running" else "",
+            **self.learning.makespan_fields(ended=self.outcome != "running"),
         )
 
     def _held(self) -> set[str]:
@@ -295,6 +316,8 @@ class Executor:
             await self._safe_state()
         if self.claims is not None:
             self.claims.release(self.task_id)
+        with anyio.CancelScope(shield=True), anyio.move_on_after(self.wm_timeout):
+            await self.learning.save()
         return self._finish(outcome, message)
 
     async def _safe_state(self) -> None:
@@ -325,6 +348,7 @@ class Executor:
             duration=self.finished_at - self.started_at,
             check=self.check,
             partial=self.partial,
+            **self.learning.makespan_fields(ended=True),
         )
 
     async def _pursue(self, goal: Goal) -> tuple[TaskOutcome, str]:
@@ -343,6 +367,8 @@ class Executor:
                 if attempt == 0:
                     return "unsolvable", str(e)
                 if not self.steps.lost or salvaged == attempt:
+                    if self.learning.lessons.failed:
+                        return "failed", self.learning.nothing_left(unmet_goal(goal, self.wm))
                     return "failed", f"replanning found no plan: {e}"
                 salvaged = attempt
                 reachable, lost = await self._salvage(goal, str(e))
@@ -365,7 +391,11 @@ class Executor:
                 reason = f"the plan ran but the goal does not hold: {'; '.join(unmet)}"
             else:
                 reason = str(failure)
-                if failure.reason in EXCLUDED_REASONS and not await self._outage_during(failure):
+                outage = await self._outage_during(failure)  # a lost router teaches nothing
+                learned = None if outage else await self._learn(failure)
+                if learned is not None:
+                    reason = f"{reason}; the next plan avoids this step"
+                if failure.reason in EXCLUDED_REASONS and not outage:
                     excluded.add((failure.agent, failure.skill))
             if attempt >= self.options.max_replans:
                 if lost or self.steps.lost:
@@ -456,23 +486,27 @@ class Executor:
         await self._catch_up()
         await self._await_agents()
         started = time.perf_counter()
+        failed = self.learning.excluded()
         busy = self.claims.busy(self.task_id)[0] if self.claims is not None else frozenset()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
         try:  # around what other tasks hold first, else with it (and wait for it: _claim)
-            plan = await self.planner.plan(free if busy else agents, self.wm, goal)
+            plan = await self.planner.plan(free if busy else agents, self.wm, goal, exclude=failed)
         except UnsolvableError:
             if busy:
                 _log.info(
                     "task %s: no plan without %s (busy); trying with them", self.task_id, busy
                 )
-                plan = await self.planner.plan(agents, self.wm, goal)
+                plan = await self.planner.plan(agents, self.wm, goal, exclude=failed)
             elif excluded:
                 _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
-                plan = await self.planner.plan(self._agents(set()), self.wm, goal)
+                plan = await self.planner.plan(self._agents(set()), self.wm, goal, exclude=failed)
             else:
                 raise
-        order = await anyio.to_thread.run_sync(to_partial_order, plan)
+        timing = self.learning.timer(plan.task.objects)
+        order = await anyio.to_thread.run_sync(
+            functools.partial(to_partial_order, plan, timing=timing)
+        )
         seconds = time.perf_counter() - started
         steps = self._steps_of(order)
         self.events.emit(
@@ -511,6 +545,14 @@ class Executor:
         with anyio.move_on_after(self.discovery.grace + self.discovery.settle + 1.0):
             while self.discovery.unknown:
                 await self.discovery.wait_changed()
+
+    async def _learn(self, failure: StepOutcome) -> FailedStep | None:
+        """The learning hook for a failed step: kept with the state it failed in."""
+        await self._catch_up()
+        agents = self.discovery.agents(include_unavailable=True)
+        return self.learning.failed(
+            failure, next((a for a in agents if a.name == failure.agent), None)
+        )
 
     def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
         agents = self.discovery.agents()
@@ -580,3 +622,15 @@ class Executor:
                 self.steps.effects_revision,
                 self.wm_timeout,
             )
+
+
+def _observed(
+    publish: Callable[[TaskEvent], None], learning: TaskLearning
+) -> Callable[[TaskEvent], None]:
+    """``publish``, after ``learning`` saw the event (run times, makespans)."""
+
+    def both(event: TaskEvent) -> None:
+        learning.observe(event)
+        publish(event)
+
+    return both

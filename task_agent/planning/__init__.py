@@ -10,23 +10,27 @@ why; running out of time :class:`~task_agent.PlannerTimeoutError`; any other eng
 
 :func:`to_partial_order` relaxes the plan's sequence into a :class:`PartialOrderPlan`: the
 :class:`Edge` values that must stay ordered (causal links, threats, conflicts, shared
-hardware), a schedule of :class:`ScheduledStep` values and, with ``balance=True``, steps moved
-between interchangeable robots to shorten the makespan.
+hardware), a schedule of :class:`ScheduledStep` values (durations from a :class:`StepTiming`
+when given: the learned ones) and, with ``balance=True``, steps moved between interchangeable
+robots to shorten the makespan. :func:`exclude_steps` removes grounded steps that failed from
+a task (``Planner.plan(..., exclude=...)``).
 
 This sub-package is the task layer's only contact with planner libraries: importing it imports
 unified-planning (see docs/benchmarks.md, Planning). The code: ``_plan`` (:class:`Plan` and its
 steps, pure data), ``_convert`` (task to unified-planning problem, engine plan to steps),
 ``_engines`` (Kairos and Fast Downward), ``_planner`` (:class:`Planner`: environments,
-compression, fallback, errors) and ``_partial_order``.
+compression, fallback, errors), ``_exclusions`` (failed groundings) and ``_partial_order``.
 """
 
 from ._convert import to_unified_planning as to_unified_planning
 from ._convert import to_up_plan as to_up_plan
 from ._engines import FD_SEARCH as FD_SEARCH
+from ._exclusions import exclude_steps as exclude_steps
 from ._partial_order import Edge as Edge
 from ._partial_order import EdgeReason as EdgeReason
 from ._partial_order import PartialOrderPlan as PartialOrderPlan
 from ._partial_order import ScheduledStep as ScheduledStep
+from ._partial_order import StepTiming as StepTiming
 from ._partial_order import to_partial_order as to_partial_order
 from ._plan import Engine as Engine
 from ._plan import Plan as Plan
@@ -49,6 +53,8 @@ __all__ = [
     "PlanStep",
     "Planner",
     "ScheduledStep",
+    "StepTiming",
+    "exclude_steps",
     "to_partial_order",
     "to_unified_planning",
     "to_up_plan",

@@ -11,23 +11,29 @@ deordering; every linear extension of the result is a valid plan with the same f
 ``resource``  both belong to the same agent (an agent runs one skill at a time here), or both
               use the same piece of hardware (a robot, a device, an appliance).
 
-Each step then starts as soon as all its predecessors have finished (estimated durations from
-the skill descriptions); the makespan is the latest finish.
+Each step then starts as soon as all its predecessors have finished; the makespan is the
+latest finish. A step's duration is the skill description's figure, or, given a
+:class:`StepTiming` (``timing=``: :class:`task_agent.learning.StepTimer`), what that agent's
+runs of the skill took so far (over the distance for a step that drives).
 
 Allocation (``balance=True``): the planner picks an agent for each step, not a balanced one.
 Greedy list scheduling then re-linearizes the steps by start time and revisits them in that
 order, moving a step to another agent offering the same skill when the step is interchangeable
 there (the same skill parameters, re-bound to that agent's hardware, and the whole plan still
-replays from the world model's state to the goal) and the makespan shrinks; it repeats until
+replays from the world model's state to the goal) and the makespan shrinks; the later steps of
+the same agent that use what the step leaves on its hardware (a part in its gripper) move with
+it; it repeats until
 no move helps. A move is only tried when the other agent's own load plus the step is below the
-makespan (otherwise it cannot help). The steps come out in that start-time order.
+makespan (otherwise it cannot help); the loads and the moved step's duration come from the
+same timing, so learned durations balance the work. The steps come out in that start-time
+order.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
-from typing import Literal
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Literal, Protocol
 
 import msgspec
 
@@ -35,10 +41,28 @@ from ..domain import PlanningTask
 from ..reachability import State, StepEffects, apply, replay, unmet, unmet_goals
 from ._plan import Plan, PlanStep
 
-__all__ = ["Edge", "PartialOrderPlan", "ScheduledStep", "to_partial_order"]
+__all__ = ["Edge", "PartialOrderPlan", "ScheduledStep", "StepTiming", "to_partial_order"]
 
 EdgeReason = Literal["causal", "threat", "conflict", "resource"]
 Key = tuple[str, ...] | tuple[str, int, str]
+
+
+class StepTiming(Protocol):
+    """Step durations other than the skill descriptions' (learned ones)."""
+
+    def seconds(
+        self, agent: str, skill: str, params: Mapping[str, object], default: float
+    ) -> float: ...
+
+
+def _timed(steps: Sequence[PlanStep], timing: StepTiming | None) -> list[PlanStep]:
+    """``steps`` with ``timing``'s durations (unchanged without one)."""
+    if timing is None:
+        return list(steps)
+    return [
+        msgspec.structs.replace(s, duration=timing.seconds(s.agent, s.skill, s.params, s.duration))
+        for s in steps
+    ]
 
 
 class Edge(msgspec.Struct, frozen=True):
@@ -224,8 +248,8 @@ def _schedule(
 # --------------------------------------------------------------------------- allocation
 
 
-def _alternatives(task: PlanningTask, step: PlanStep) -> list[PlanStep]:
-    """The step re-bound to each other agent offering the same skill."""
+def _alternatives(task: PlanningTask, step: PlanStep, timing: StepTiming | None) -> list[PlanStep]:
+    """The step re-bound to each other agent offering the same skill (timed by ``timing``)."""
     out = []
     for schema in task.actions.values():
         if schema.skill != step.skill or schema.agent == step.agent:
@@ -246,7 +270,7 @@ def _alternatives(task: PlanningTask, step: PlanStep) -> list[PlanStep]:
                 duration=schema.duration,
             )
         )
-    return out
+    return _timed(out, timing)
 
 
 def _states(task: PlanningTask, steps: Sequence[PlanStep]) -> list[State]:
@@ -268,7 +292,37 @@ def _valid_from(task: PlanningTask, state: State, steps: Sequence[PlanStep]) -> 
     return not unmet_goals(task, state)
 
 
-def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialOrderPlan:
+def _moved(
+    task: PlanningTask,
+    steps: Sequence[PlanStep],
+    effects: Sequence[StepEffects],
+    k: int,
+    alt: PlanStep,
+    timing: StepTiming | None,
+) -> list[PlanStep] | None:
+    """``steps`` with step ``k`` replaced by ``alt`` and, with it, the later steps of the
+    same agent that use what step ``k`` left on that agent's hardware (the part a pick put in
+    its gripper, which only that gripper can place); None if one of them cannot move."""
+    out = list(steps)
+    out[k] = alt
+    agent = steps[k].agent
+    schema = task.actions.get(steps[k].action)
+    own = set(schema.bound.values()) if schema is not None else set()
+    held = {f for f in effects[k].adds if own & set(f[1])}
+    for j in range(k + 1, len(steps)):
+        if not held or steps[j].agent != agent or not effects[j].reads & held:
+            continue
+        rebound = [a for a in _alternatives(task, steps[j], timing) if a.agent == alt.agent]
+        if not rebound:
+            return None
+        out[j] = rebound[0]
+        held |= {f for f in effects[j].adds if own & set(f[1])}
+    return out
+
+
+def _balance(
+    task: PlanningTask, steps: list[PlanStep], rounds: int, timing: StepTiming | None
+) -> PartialOrderPlan:
     best = _schedule(task, steps)
     moves: list[str] = []
     for _ in range(rounds):
@@ -282,19 +336,21 @@ def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialO
         for s in steps:
             load[s.agent] = load.get(s.agent, 0.0) + s.duration
         states: list[State] | None = None
+        effects: list[StepEffects] | None = None
         moved = False
         for k in range(len(steps)):
             candidates = []
-            for alt in _alternatives(task, steps[k]):
+            for alt in _alternatives(task, steps[k], timing):
                 # the other agent's work alone would last at least this long
                 if load.get(alt.agent, 0.0) + alt.duration >= best.makespan - 1e-9:
                     continue
                 states = states or _states(task, steps)
                 if unmet(task, alt.ground, states[k]):
                     continue
-                if not _valid_from(task, states[k].copy(), [alt, *steps[k + 1 :]]):
+                effects = effects or replay(task, [s.ground for s in steps])[0]
+                trial = _moved(task, steps, effects, k, alt, timing)
+                if trial is None or not _valid_from(task, states[k].copy(), trial[k:]):
                     continue
-                trial = [*steps[:k], alt, *steps[k + 1 :]]
                 schedule = _schedule(task, trial)
                 if schedule.makespan < best.makespan - 1e-9:
                     candidates.append((schedule.makespan, alt.agent, trial, schedule))
@@ -308,12 +364,15 @@ def _balance(task: PlanningTask, steps: list[PlanStep], rounds: int) -> PartialO
     return _schedule(task, steps, moves)
 
 
-def to_partial_order(plan: Plan, *, balance: bool = True, rounds: int = 64) -> PartialOrderPlan:
+def to_partial_order(
+    plan: Plan, *, balance: bool = True, rounds: int = 64, timing: StepTiming | None = None
+) -> PartialOrderPlan:
     """The plan's partial order and schedule (see the module doc). ``rounds`` bounds the
-    number of re-assignments balancing makes."""
-    steps = list(plan.steps)
+    number of re-assignments balancing makes; ``timing`` gives the step durations (default:
+    the skill descriptions')."""
+    steps = _timed(plan.steps, timing)
     if balance and len({s.agent for s in plan.task.actions.values()}) > 1:
-        result = _balance(plan.task, steps, rounds)
+        result = _balance(plan.task, steps, rounds, timing)
     else:
         result = _schedule(plan.task, steps)
     renumbered = tuple(

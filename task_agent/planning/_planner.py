@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +49,7 @@ from ..domain import PlanningTask
 from ..reachability import diagnose, relevant_objects, replay
 from ._convert import plan_steps, to_unified_planning
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
+from ._exclusions import exclude_steps
 from ._plan import Engine, Plan, PlanStats, PlanStep
 
 __all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "Planner"]
@@ -198,11 +199,15 @@ class Planner:
         goal: Goal,
         *,
         registry: ConditionRegistry | None = None,
+        exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
     ) -> Plan:
-        """Build the task from the agents and the world model, then :meth:`solve` it."""
+        """Build the task from the agents and the world model, then :meth:`solve` it.
+        ``exclude``: grounded steps (agent, skill, parameters) the plan must not contain
+        (:func:`~task_agent.planning.exclude_steps`)."""
         from ..domain import build_task
 
-        return self.solve(build_task(agents, view, goal, registry=registry))
+        task = build_task(agents, view, goal, registry=registry)
+        return self.solve(exclude_steps(task, exclude))
 
     async def plan(
         self,
@@ -211,12 +216,13 @@ class Planner:
         goal: Goal,
         *,
         registry: ConditionRegistry | None = None,
+        exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
     ) -> Plan:
         """:meth:`plan_sync` without blocking the loop: the task is built here (it reads
         ``view``), the solve runs in a worker thread under the limiter."""
         from ..domain import build_task
 
-        task = build_task(agents, view, goal, registry=registry)
+        task = exclude_steps(build_task(agents, view, goal, registry=registry), exclude)
         limiter = self._limiter or anyio.CapacityLimiter(1)
         self._limiter = limiter
         return await anyio.to_thread.run_sync(self.solve, task, limiter=limiter)

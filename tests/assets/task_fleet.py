@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import AsyncIterator, Mapping
 from contextlib import asynccontextmanager
+from typing import Any
 
 import anyio
 import msgspec
@@ -29,6 +30,7 @@ from task_agent.discovery import Discovery
 from task_agent.execution import CoreRunner, Executor
 from task_agent.planning import Planner
 from task_agent.protocol import TaskEvent, TaskOptions
+from task_agent.service import TaskService
 from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, SkillSpec, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Pose, Position, Relation, SetRelation, Value
@@ -94,6 +96,18 @@ class Fleet(msgspec.Struct, kw_only=True):
 
     def of(self, kind: type[TaskEvent]) -> list[TaskEvent]:
         return [e for e in self.events if isinstance(e, kind)]
+
+    def service(self, **options: Any) -> TaskService:
+        """A task service on this fleet, publishing into ``events`` (``options``: more
+        :class:`TaskService` arguments). Start its ``run`` in a task group."""
+        return TaskService(
+            wm=self.wm,
+            discovery=self.discovery,
+            runner=self.runner,
+            publish=self.publish,
+            planners=lambda _options: PLANNER,
+            **options,
+        )
 
 
 def _pose(x: float, y: float) -> dict[str, Value]:

@@ -43,7 +43,7 @@ from task_agent.protocol import (
     decode_reply,
 )
 from task_agent.service import TaskService
-from tests.assets.task_fleet import PLANNER, Fleet, fleet
+from tests.assets.task_fleet import Fleet, fleet
 
 FILE = """
 name = "kit one gear"
@@ -66,13 +66,7 @@ params = {{ object = "@pick1.object", container = "{kit}" }}
 @asynccontextmanager
 async def service(**kwargs: object) -> AsyncIterator[tuple[Fleet, TaskService]]:
     async with fleet(start={"r1": 1}, **kwargs) as f:  # type: ignore[arg-type]
-        tasks = TaskService(
-            wm=f.wm,
-            discovery=f.discovery,
-            runner=f.runner,
-            publish=f.publish,
-            planners=lambda _options: PLANNER,
-        )
+        tasks = f.service()
         async with anyio.create_task_group() as tg:
             await tg.start(tasks.run)
             yield f, tasks
