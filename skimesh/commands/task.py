@@ -16,21 +16,18 @@ A goal task that succeeded is checked fact by fact by the task agent (in the wor
 when ``skimesh sim`` runs on the mesh, in the physics, with the simulated time of the check);
 ``submit``, ``watch`` and ``status`` print each fact's verdicts.
 
-Exit codes of ``submit`` and ``watch``: 0 succeeded (and no goal fact contradicted by the
-physics), 1 failed, 2 unsolvable, 3 aborted, 4 usage or other errors (bad goal, a task file
-that does not verify, no task agent), 5 succeeded in the world model but the physics
-contradicts a goal fact, 6 partial (an agent was lost; the goal facts still reachable were
-achieved); 130 interrupted (the task was aborted). ``verify``: 0 verifies,
-1 problems, 4 errors. ``abort``: 0 the task has ended, 4 errors (or still running after the
-service's wait). ``status`` exits 0 whatever the task's state. ``status``,
-``list`` and ``abort`` print JSON with ``--json`` (``abort``: the task's state plus the
-service's ``reply``).
+Exit codes: the one table of :class:`skimesh.errors.Exit` (README, "Exit codes"): for
+``submit`` and ``watch`` 0 succeeded, 1 failed, 2 unsolvable (or refused: a bad goal, a task
+file that does not verify), 3 no task agent answered, 4 aborted, 5 succeeded in the world
+model but the physics contradicts a goal fact, 6 partial (an agent was lost; the goal facts
+still reachable were achieved), 130 interrupted (the task was aborted).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
 
@@ -43,6 +40,7 @@ from task_agent.protocol import (
     StepProgress,
     TaskEvent,
     TaskFinished,
+    TaskInfo,
     TaskOptions,
 )
 from wm_store import WmClient, WmError, ZenohTransport
@@ -178,6 +176,14 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="when a step fails, hand it to a person through the operator agent (answered "
         "with `skimesh operator`): any step, or only steps of SKILLS (comma-separated skill "
         "names, e.g. pick,place); default: never, the goal is replanned instead",
+    )
+    submit.add_argument(
+        "--priority",
+        type=int,
+        default=0,
+        metavar="N",
+        help="among tasks that wait for the same robots or objects, a higher N goes first "
+        "(default: 0); a running task keeps what it holds",
     )
     submit.add_argument(
         "--detach",
@@ -374,6 +380,7 @@ def _options(args: argparse.Namespace) -> TaskOptions:
         simulate=args.simulate,
         operator_fallback="*" in fallback,
         operator_fallback_skills=fallback - {"", "*"},
+        priority=args.priority,
     )
 
 
@@ -456,17 +463,35 @@ async def _list(args: argparse.Namespace) -> int:
     if args.json:
         print_json(tasks)
     else:
-        rows = [
-            (
-                info.task_id,
-                f"{info.outcome} (paused)" if info.paused else info.outcome,
-                str(info.replans),
-                info.goal or info.name,
-            )
-            for info in tasks
-        ]
-        print_table(("TASK", "STATE", "REPLANS", "GOAL"), rows)
+        print_table(
+            ("TASK", "STATE", "PRIO", "HOLDS", "ESTIMATED END", "REPLANS", "GOAL"),
+            [_list_row(info) for info in tasks],
+        )
     return 0
+
+
+def _list_row(info: TaskInfo) -> tuple[str, ...]:
+    """One row of ``task list``: the task's state (waiting: for what), what it holds (its
+    claims: no other task commands them) and when it should end (its start plus the estimated
+    makespan, on the task agent's clock)."""
+    state: str = info.outcome
+    if info.paused:
+        state += " (paused)"
+    elif info.waiting:
+        state = f"waiting for {info.waiting}"
+    end = "-"
+    if info.outcome == "running" and info.estimated_makespan is not None and info.started_at:
+        end = time.strftime("%H:%M:%S", time.localtime(info.started_at + info.estimated_makespan))
+    holds = ", ".join(info.claims) or "-"
+    return (
+        info.task_id,
+        state,
+        str(info.priority),
+        holds,
+        end,
+        str(info.replans),
+        info.goal or info.name,
+    )
 
 
 async def _abort(args: argparse.Namespace) -> int:

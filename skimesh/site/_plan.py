@@ -356,7 +356,7 @@ class _Planner:
         if task is None:
             return []
         host, name = self.host_of("the task agent", task.host), self.name("", "task-agent")
-        argv = ["task-agent", *self.client(host, name)]
+        argv = ["task-agent", *self.client(host, name), "--durations", "durations.json"]
         argv += ["--operator", task.operator] if task.operator else []
         return [Component(name, "task-agent", host, tuple(argv), ("tasks",))]
 

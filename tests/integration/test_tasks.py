@@ -431,3 +431,47 @@ async def test_killing_an_agent_mid_task_lets_the_other_robot_finish(site: Site)
         replan = next(e for e in events if isinstance(e, Replanning))
         later = [e for e in events if isinstance(e, StepStarted) and e.seq > replan.seq]
         assert later and all(e.agent == "r1" for e in later)
+
+
+async def test_two_users_submitting_at_once_never_command_one_robot_from_two_tasks(
+    site: Site,
+) -> None:
+    """Two users, each on a session of their own, submit a goal for r1's kit at the same time:
+    the task that claims r1 first runs; the other waits for it (``task list`` says for what)
+    and then runs, so r1's steps of the two tasks never overlap, and both succeed."""
+    config = MeshConfig(connect=(site.endpoint,), mesh=site.mesh)
+    events: dict[str, list[TaskEvent]] = {"a": [], "b": []}
+    waiting_seen: list[str] = []
+
+    async def user(name: str, goal: str) -> TaskFinished:
+        async with open_mesh(config) as mesh:
+            client = TaskClient(mesh, timeout=10.0)
+            return await client.run_goal(goal, on_event=events[name].append, deadline=90)
+
+    async def watch_list() -> None:
+        async with open_mesh(config) as mesh:
+            client = TaskClient(mesh, timeout=10.0)
+            while True:
+                waiting_seen.extend(i.waiting for i in await client.list() if i.waiting)
+                await anyio.sleep(0.05)
+
+    results: dict[str, TaskFinished] = {}
+    async with anyio.create_task_group() as tg:
+        tg.start_soon(watch_list)
+
+        async def run(name: str, goal: str) -> None:
+            results[name] = await user(name, goal)
+
+        async with anyio.create_task_group() as users:
+            users.start_soon(run, "a", "contain(kit-r1, gear-14)")
+            users.start_soon(run, "b", "contain(kit-r1, gear-16)")
+        tg.cancel_scope.cancel()
+    assert results["a"].outcome == results["b"].outcome == "succeeded", results
+    spans = {
+        name: [(s.stamp, f.stamp) for s, f in steps(evs).values() if s.agent == "r1"]
+        for name, evs in events.items()
+    }
+    assert spans["a"] and spans["b"]
+    first, second = sorted(spans.values(), key=lambda sp: min(s for s, _ in sp))
+    assert max(f for _, f in first) <= min(s for s, _ in second), f"interleaved on r1: {spans}"
+    assert any("r1" in w for w in waiting_seen), "the second task said what it waited for"
