@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import rerun.chunk
 
 from .procs import ROOT
+from .rrd import chunks, column
 
 pytestmark = [pytest.mark.slow, pytest.mark.sim, pytest.mark.zenoh]
 
@@ -42,18 +42,6 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subprocess.Comp
     )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return rrd, done
-
-
-def chunks(path: Path) -> list[rerun.chunk.Chunk]:
-    reader = rerun.chunk.RrdReader(str(path))
-    return list(reader.stream(store=reader.recordings()[0]).to_chunks())
-
-
-def column(chunk: rerun.chunk.Chunk, name: str) -> list[object]:
-    batch = chunk.to_record_batch()
-    if name not in batch.schema.names:
-        return []
-    return [v for cell in batch.column(name).to_pylist() for v in cell or []]
 
 
 @pytest.mark.timeout(480)

@@ -26,7 +26,6 @@ from pathlib import Path
 
 import anyio
 import pytest
-import rerun.chunk
 
 from meshlink import MeshConfig, open_mesh
 from scenario import load_scenario
@@ -34,6 +33,7 @@ from task_agent import TaskClient
 from task_agent.protocol import StepFinished, TaskFinished
 
 from .procs import ROOT
+from .rrd import chunks, column
 from .test_deploy_cli import Deployment, start_router
 
 pytestmark = [pytest.mark.slow, pytest.mark.sim, pytest.mark.zenoh, pytest.mark.timeout(420)]
@@ -81,18 +81,6 @@ async def _mission(site: Deployment, rrd: Path) -> tuple[str, TaskFinished]:
                     finished = event
         await anyio.sleep(2.0)  # the last changes and agents' lines reach the monitor
     return task_id, finished
-
-
-def chunks(path: Path) -> list[rerun.chunk.Chunk]:
-    reader = rerun.chunk.RrdReader(str(path))
-    return list(reader.stream(store=reader.recordings()[0]).to_chunks())
-
-
-def column(chunk: rerun.chunk.Chunk, name: str) -> list[object]:
-    batch = chunk.to_record_batch()
-    if name not in batch.schema.names:
-        return []
-    return [v for cell in batch.column(name).to_pylist() for v in cell or []]
 
 
 def test_a_monitor_started_mid_task_records_what_the_demo_records(
