@@ -132,6 +132,7 @@ class MissionFeed:
                     if self.on_event is not None:
                         self.on_event(event)
                     if isinstance(event, TaskFinished):
+                        _log.info("task %s ended %s: recorded", task_id, event.outcome)
                         self._ended_event(task_id).set()
         except TaskError as e:
             _log.warning("stopped following task %s: %s", task_id, e)

@@ -73,13 +73,14 @@ async def _mission(site: Deployment, rrd: Path) -> tuple[str, TaskFinished]:
             async for event in events:
                 if isinstance(event, StepFinished):
                     break
-        site.start("monitor", "monitor", *site.connect, "--scenario", "kitting",
+        site.start("monitor", "-v", "monitor", *site.connect, "--scenario", "kitting",
                    "--rrd", str(rrd), ready="monitor ready", timeout=120)  # fmt: skip
         async with client.watch(task_id, deadline=DEADLINE) as events:
             async for event in events:
                 if isinstance(event, TaskFinished):
                     finished = event
-        await anyio.sleep(2.0)  # the last changes and agents' lines reach the monitor
+        monitor = site.children["monitor"]  # it says when it has recorded the task's end
+        await anyio.to_thread.run_sync(monitor.wait_stderr, f"task {task_id} ended")
     return task_id, finished
 
 
