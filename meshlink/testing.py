@@ -54,9 +54,10 @@ def free_port() -> int:
 
 
 @contextmanager
-def running_router(*, attempts: int = 5) -> Iterator[str]:
+def running_router(*, attempts: int = 5, config_file: str | None = None) -> Iterator[str]:
     """Run a Zenoh router in this process on ``tcp/127.0.0.1:<free port>`` (multicast
     scouting off) and yield its endpoint; the router session is closed on exit.
+    ``config_file``: a Zenoh JSON5 file loaded first (see :class:`meshlink.MeshConfig`).
     Synchronous: opening a router is quick and does not need an event loop.
 
     Raises:
@@ -65,7 +66,9 @@ def running_router(*, attempts: int = 5) -> Iterator[str]:
     for attempt in range(attempts):
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         try:
-            session = zenoh.open(to_zenoh_config(router_config([endpoint])))
+            session = zenoh.open(
+                to_zenoh_config(router_config([endpoint], config_file=config_file))
+            )
         except zenoh.ZError:
             if attempt == attempts - 1:
                 raise
