@@ -279,6 +279,8 @@ class Planned(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     names: dict[str, str] = {}
     """How to name the elements the steps' parameters give by id, to a person: the label with
     the id where the two differ (``wm_store.display_name``), by id."""
+    parts: int = 0
+    """Parts of the goal the planner planned apart as small problems (0: the whole task)."""
 
 
 class StepStarted(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):

@@ -518,6 +518,7 @@ class Executor:
             plan_seconds=seconds,
             makespan=order.makespan,
             sequential=order.sequential,
+            parts=plan.stats.parts,
         )
         return steps
 

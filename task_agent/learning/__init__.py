@@ -27,6 +27,7 @@ from ._lessons import changed_params as changed_params
 from ._task import Makespans as Makespans
 from ._task import TaskLearning as TaskLearning
 from ._timing import StepTimer as StepTimer
+from ._timing import positions as positions
 
 __all__ = [
     "NOT_LEARNED",
@@ -39,4 +40,5 @@ __all__ = [
     "StepTimer",
     "TaskLearning",
     "changed_params",
+    "positions",
 ]

@@ -59,6 +59,12 @@ class PlanStats(msgspec.Struct, frozen=True, kw_only=True):
     engine_s: float = math.nan
     """The engine's own figure for its work, when it reports one."""
     total_s: float = 0.0
+    parts: int = 0
+    """Parts of the goal planned apart as small problems (0: the whole task was solved)."""
+    part_solves: int = 0
+    """Engine calls of the decomposed path."""
+    widened: int = 0
+    """Parts whose first small problem had no plan that holds on the full task."""
 
 
 class Plan(msgspec.Struct, frozen=True, kw_only=True):

@@ -26,6 +26,7 @@ problems found). unified-planning is untyped: ``Any`` stays in the planner modul
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import time
@@ -46,8 +47,11 @@ from .._errors import PlannerTimeoutError, PlanningError, UnsolvableError
 from .._goals import Goal
 from ..discovery import AgentInfo
 from ..domain import PlanningTask
+from ..learning import positions
 from ..reachability import diagnose, relevant_objects, replay
+from ._allocate import Point, hardware
 from ._convert import plan_steps, to_unified_planning
+from ._decompose import solve_in_parts
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
 from ._exclusions import exclude_steps
 from ._plan import Engine, Plan, PlanStats, PlanStep
@@ -85,6 +89,7 @@ class Planner:
         engine: Engine = "kairos",
         timeout: float = 30.0,
         compress: bool = True,
+        decompose: bool = True,
         limiter: anyio.CapacityLimiter | None = None,
     ) -> None:
         if engine not in ("kairos", "fast-downward"):
@@ -92,6 +97,7 @@ class Planner:
         self.engine: Engine = engine
         self.timeout = timeout
         self.compress = compress
+        self.decompose = decompose
         self._limiter = limiter
         self._lock = threading.Lock()
         self._env: Any = None
@@ -128,14 +134,42 @@ class Planner:
 
     # ------------------------------------------------------------------ public API
 
-    def solve(self, task: PlanningTask) -> Plan:
-        """A plan for ``task`` (blocking; see the module doc for the errors). Thread-safe:
+    def solve(self, task: PlanningTask, *, where: Mapping[str, Point] | None = None) -> Plan:
+        """A plan for ``task`` (blocking; see the module doc for the errors). ``where``: the
+        (x, y) of elements that have a pose, for the allocation's bids. Thread-safe:
         concurrent calls on one planner run one after the other."""
         with self._lock:
-            return self._solve(task)
+            start = time.perf_counter()
+            if self.decompose:
+                plan = self._solve_in_parts(task, start, where)
+                if plan is not None:
+                    return plan
+            return self._solve(task, start)
 
-    def _solve(self, task: PlanningTask) -> Plan:
-        start = time.perf_counter()
+    def _solve_in_parts(
+        self, task: PlanningTask, start: float, where: Mapping[str, Point] | None
+    ) -> Plan | None:
+        """The decomposed path (:mod:`._decompose`), within half the time-out."""
+
+        def attempt(sub: PlanningTask, seconds: float) -> tuple[bool, list[PlanStep]]:
+            result = self._attempt(sub, seconds)
+            return result.status in SOLVED, result.steps
+
+        found = solve_in_parts(task, attempt, seconds=self.timeout / 2, where=where)
+        if found is None or replay(task, [s.ground for s in found.steps])[1]:
+            return None
+        stats = PlanStats(
+            engine=self.engine,
+            objects=len(task.objects),
+            objects_solved=found.objects,
+            parts=found.parts,
+            part_solves=found.solves,
+            widened=found.widened,
+            total_s=time.perf_counter() - start,
+        )
+        return Plan(steps=tuple(found.steps), task=task, stats=stats)
+
+    def _solve(self, task: PlanningTask, start: float) -> Plan:
         deadline = start + self.timeout
         solved = task
         named = {a for lit in task.goal for a in lit.args}
@@ -143,7 +177,7 @@ class Planner:
             keep = relevant_objects(task)
             if len(keep) < len(task.objects):
                 solved = task.restrict(keep)
-        attempt = self._attempt(solved, self.timeout)
+        attempt = self._attempt(solved, deadline - time.perf_counter())
         fallback = False
         problem = "not solved"
         if attempt.status in SOLVED:
@@ -206,8 +240,8 @@ class Planner:
         (:func:`~task_agent.planning.exclude_steps`)."""
         from ..domain import build_task
 
-        task = build_task(agents, view, goal, registry=registry)
-        return self.solve(exclude_steps(task, exclude))
+        task = exclude_steps(build_task(agents, view, goal, registry=registry), exclude)
+        return self.solve(task, where=_where(task, view) if self.decompose else None)
 
     async def plan(
         self,
@@ -223,9 +257,11 @@ class Planner:
         from ..domain import build_task
 
         task = exclude_steps(build_task(agents, view, goal, registry=registry), exclude)
+        where = _where(task, view) if self.decompose else None
         limiter = self._limiter or anyio.CapacityLimiter(1)
         self._limiter = limiter
-        return await anyio.to_thread.run_sync(self.solve, task, limiter=limiter)
+        solve = functools.partial(self.solve, task, where=where)
+        return await anyio.to_thread.run_sync(solve, limiter=limiter)
 
     def emit_pddl(
         self, task: PlanningTask, directory: Path | str, *, compressed: bool = False
@@ -243,3 +279,11 @@ class Planner:
         domain.write_text(text[0])
         problem.write_text(text[1])
         return domain, problem
+
+
+def _where(task: PlanningTask, view: WorldView) -> dict[str, Point]:
+    """The poses the allocation's bids use: the agents' hardware and the goal's elements."""
+    ids = {a for lit in task.goal for a in lit.args}
+    for kit in hardware(task).values():
+        ids |= kit
+    return positions(view, ids)

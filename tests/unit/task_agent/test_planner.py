@@ -184,14 +184,14 @@ def test_fallback_to_the_full_task_when_compression_drops_too_much(
         "relevant_objects",
         lambda t: {o for o in t.objects if not o.startswith("Station")},
     )
-    plan = Planner().solve(task)
+    plan = Planner(decompose=False).solve(task)
     assert plan.stats.fallback
     assert plan.stats.objects_solved == plan.stats.objects
 
 
 def test_no_compression(kitting: tuple[KittingScene, PlanningTask]) -> None:
     _, task = kitting
-    plan = Planner(compress=False).solve(task)
+    plan = Planner(compress=False, decompose=False).solve(task)
     assert plan.stats.objects_solved == plan.stats.objects and not plan.stats.fallback
 
 

@@ -1,0 +1,137 @@
+"""Planning that follows the goal (task_agent.planning's decomposed path), with the monolithic
+planner as the oracle: goal parts, the fact graph and its hubs, the allocation, small problems
+that widen until they hold on the full task, and the fallback to the whole task."""
+
+from __future__ import annotations
+
+import pytest
+
+from task_agent import UnsolvableError, parse_goal
+from task_agent.discovery import agents_from_view
+from task_agent.domain import Lit, PlanningTask, build_task
+from task_agent.learning import positions
+from task_agent.planning import Plan, Planner, to_partial_order
+from task_agent.planning._allocate import _assign, allocate
+from task_agent.planning._parts import FactGraph, parts
+from task_agent.reachability import replay
+from tests.assets.planning.fleet import Fleet, fleet_scene, one_gear_each
+from tests.unit.task_agent.test_planner import oven_task
+
+
+def task_of(fleet: Fleet, text: str) -> PlanningTask:
+    goal = parse_goal(text, fleet.view)
+    return build_task(agents_from_view(fleet.view), fleet.view, goal)
+
+
+def valid(plan: Plan) -> bool:
+    return replay(plan.task, [s.ground for s in plan.steps])[1] == ""
+
+
+def test_literals_that_share_an_element_are_one_part() -> None:
+    goal = (
+        Lit("contain", ("kit-1", "gear-1")),
+        Lit("contain", ("kit-2", "gear-2")),
+        Lit("contain", ("kit-1", "gear-3")),
+        Lit("doorOpen", ("oven",), positive=False),
+    )
+    assert parts(goal) == [(goal[0], goal[2]), (goal[1],), (goal[3],)]
+
+
+def test_a_hub_is_reached_but_not_crossed() -> None:
+    facts = [("at", (f"robot-{i}", "depot")) for i in range(10)]
+    facts += [("owns", ("robot-1", "gripper-1")), ("owns", ("robot-2", "gripper-2"))]
+    objects = {o: "thing" for _, args in facts for o in args}
+    graph = FactGraph(facts, objects)
+    assert graph.focus({"robot-1"}, depth=3, hub=4) == {"robot-1", "gripper-1", "depot"}
+    # not a hub: the depot leads to every robot
+    assert "gripper-2" in graph.focus({"robot-1"}, depth=3, hub=20)
+
+
+def test_each_kit_goes_to_the_robot_that_carries_it() -> None:
+    fleet = fleet_scene(6)
+    task = task_of(
+        fleet,
+        " and ".join(f"contain({k}, {g[0]})" for k, g in zip(fleet.kits, fleet.gears, strict=True)),
+    )
+    goal_parts = parts(task.goal)
+    graph = FactGraph(task.init, task.objects)
+    allocation = allocate(task, goal_parts, graph, positions(fleet.view, task.objects))
+    assigned = [r[0] for r in allocation.ranking]
+    assert assigned == fleet.agents
+    assert all(len(r) == len(fleet.agents) for r in allocation.ranking)
+
+
+def test_parts_any_robot_can_take_are_spread_over_them() -> None:
+    bids = {(i, a): 1.0 for i in range(4) for a in ("r1", "r2")}
+    bids[(0, "r1")] = 0.5  # r1 is nearer to part 0
+    assigned = _assign(4, ["r1", "r2"], bids)
+    assert assigned[0] == "r1"
+    assert sorted(assigned.values()) == ["r1", "r1", "r2", "r2"]
+
+
+def test_the_decomposed_plan_matches_the_monolithic_one() -> None:
+    fleet = fleet_scene(6)
+    goal = one_gear_each(fleet)
+    task = build_task(agents_from_view(fleet.view), fleet.view, goal)
+    where = positions(fleet.view, task.objects)
+    split = Planner().solve(task, where=where)
+    whole = Planner(decompose=False).solve(task)
+    assert split.stats.parts == 6 and split.stats.widened == 0
+    assert whole.stats.parts == 0
+    assert valid(split) and valid(whole)
+    assert split.stats.objects_solved < len(task.objects) / 2
+    assert {s.agent for s in split.steps} == set(fleet.agents)
+    ours, oracle = to_partial_order(split).makespan, to_partial_order(whole).makespan
+    assert ours <= oracle * 1.1
+
+
+def test_a_goal_for_one_robot_stays_small_in_a_large_world() -> None:
+    fleet = fleet_scene(30)
+    task = task_of(fleet, f"contain({fleet.kits[7]}, {fleet.gears[7][1]})")
+    plan = Planner().solve(task)
+    assert valid(plan) and {s.agent for s in plan.steps} == {"r8"}
+    assert plan.stats.parts == 1 and plan.stats.objects_solved <= 15
+
+
+def test_a_robot_in_the_way_is_planned_with_the_part_that_needs_its_spot() -> None:
+    # Both robots start at their own one-robot station; each needs a gear of the other's
+    # cell: the first part's robot alone finds the station taken, so the part widens to
+    # the robot standing there, which makes room.
+    fleet = fleet_scene(2, start="cells")
+    text = (
+        f"contain({fleet.kits[0]}, {fleet.gears[1][0]}) and "
+        f"contain({fleet.kits[1]}, {fleet.gears[0][0]})"
+    )
+    task = task_of(fleet, text)
+    plan = Planner().solve(task)
+    assert valid(plan)
+    assert plan.stats.parts == 2 and plan.stats.widened >= 1
+
+
+def test_a_helper_agent_joins_the_part_that_needs_it() -> None:
+    _, task = oven_task(can_open=True)
+    plan = Planner().solve(task)
+    assert valid(plan)
+    assert "oven-agent" in {s.agent for s in plan.steps}
+    assert plan.stats.parts >= 1 and plan.stats.widened >= 1
+
+
+def test_an_unsolvable_goal_is_reported_by_the_whole_task() -> None:
+    # a gear in a closed oven nobody can open: every part fails, the whole task says why
+    _, task = oven_task(can_open=False)
+    with pytest.raises(UnsolvableError, match="unreachable"):
+        Planner(timeout=20).solve(task)
+
+
+@pytest.mark.parametrize("swap", [0, 1, 2])
+def test_kit_goals_across_cells_agree_with_the_oracle(swap: int) -> None:
+    # gears of other cells into the kits: every robot must take another's one-robot spot,
+    # so the parts are coupled (planned together at the second level)
+    fleet = fleet_scene(3, start="cells")
+    chosen = [(i, (i + swap) % 3) for i in range(3)]
+    text = " and ".join(f"contain({fleet.kits[i]}, {fleet.gears[j][0]})" for i, j in chosen)
+    task = task_of(fleet, text)
+    split = Planner().solve(task)
+    whole = Planner(decompose=False).solve(task)
+    assert valid(split) and valid(whole)
+    assert split.stats.parts == 3
