@@ -161,10 +161,14 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
     operator_fallback: bool = False
     """When a skill fails, ask the operator before replanning."""
     operator_fallback_skills: frozenset[str] = frozenset()
-    priority: int = 0
-    """Among tasks that wait for the same robots or objects, a higher priority goes first."""
     """Ask the operator only when one of these skills fails (by skill name, e.g. ``pick``);
     the others are replanned. Ignored when ``operator_fallback`` is set (every skill)."""
+    priority: int = 0
+    """Among tasks that wait for the same robots or objects, a higher priority goes first."""
+    planning: Literal["decomposed", "monolithic"] = "decomposed"
+    """``decomposed``: the goal's independent parts are allocated to agents and planned as
+    small problems, falling back to the whole task when one has no plan; ``monolithic``: the
+    whole task at once (:mod:`task_agent.planning`)."""
 
 
 class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):

@@ -138,11 +138,12 @@ def default_planners() -> PlannerFactory:
     limiter = anyio.CapacityLimiter(1)
 
     @functools.cache
-    def make(engine: str, timeout: float) -> Planner:
+    def make(engine: str, timeout: float, planning: str) -> Planner:
         kind: Engine = "fast-downward" if engine == "fast-downward" else "kairos"
-        return Planner(engine=kind, timeout=timeout, limiter=limiter)
+        decompose = planning != "monolithic"
+        return Planner(engine=kind, timeout=timeout, decompose=decompose, limiter=limiter)
 
-    return lambda options: make(options.engine, options.planner_timeout)
+    return lambda options: make(options.engine, options.planner_timeout, options.planning)
 
 
 def mesh_verifier(mesh: Mesh, wm: WorldModel, *, find_timeout: float = 2.0) -> GoalVerifier:

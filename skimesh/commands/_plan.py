@@ -51,6 +51,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "default) or fast-downward (a separate process per plan)",
     )
     p.add_argument(
+        "--planning",
+        choices=("decomposed", "monolithic"),
+        default="decomposed",
+        help="decomposed (the default): the goal's independent parts go to robots first and "
+        "are planned as small problems, the whole task only when one has no plan; "
+        "monolithic: the whole task at once",
+    )
+    p.add_argument(
         "--planner-timeout",
         type=float,
         default=30.0,
@@ -104,7 +112,8 @@ async def plan_goal(args: argparse.Namespace) -> int:
                 print(f"wrote {path}", file=sys.stderr)
         goal = parse_goal(args.goal, wm)
         agents = [a for a in agents_from_view(wm) if a.available]
-        planner = Planner(engine=args.engine, timeout=args.planner_timeout)
+        decompose = args.planning == "decomposed"
+        planner = Planner(engine=args.engine, timeout=args.planner_timeout, decompose=decompose)
         try:
             plan = await planner.plan(agents, wm, goal)
         except UnsolvableError as e:
@@ -115,6 +124,7 @@ async def plan_goal(args: argparse.Namespace) -> int:
             return Exit.FAILED
         order = to_partial_order(plan)
         shown = order if args.json else named_order(order, wm.find_element)
+        print(plan.stats.summary(), file=sys.stderr)
     if args.json:
         sys.stdout.write(msgspec.json.encode(shown).decode() + "\n")
     else:

@@ -146,6 +146,14 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         "default) or fast-downward (a separate process per plan); ignored with --file",
     )
     submit.add_argument(
+        "--planning",
+        choices=("decomposed", "monolithic"),
+        default="decomposed",
+        help="decomposed (the default): the goal's independent parts go to robots first and "
+        "are planned as small problems, the whole task only when one has no plan; "
+        "monolithic: the whole task at once; ignored with --file",
+    )
+    submit.add_argument(
         "--planner-timeout",
         type=float,
         default=30.0,
@@ -376,6 +384,7 @@ def _options(args: argparse.Namespace) -> TaskOptions:
     return TaskOptions(
         engine=args.engine,
         planner_timeout=args.planner_timeout,
+        planning=args.planning,
         max_replans=args.max_replans,
         simulate=args.simulate,
         operator_fallback="*" in fallback,

@@ -3,7 +3,13 @@ the plan as a partial order the robots can run in parallel.
 
 :class:`Planner` solves a task with Kairos (default, in-process) or Fast Downward
 (``engine="fast-downward"``, a child process per call), within a time-out, and returns a
-:class:`Plan` of agent-tagged :class:`PlanStep` values (with :class:`PlanStats`). A goal without
+:class:`Plan` of agent-tagged :class:`PlanStep` values (with :class:`PlanStats`). By default
+it plans *by parts* (``decompose=True``): the goal's independent parts are allocated to agents
+first (a least-cost assignment over bids from the scene graph and the poses) and planned one
+after the other as small problems over the elements near each part, widened until a plan
+holds on the full task (coupled parts, such as two robots that need each other's spot, are
+planned together); when a part has no plan at any width the whole task is solved (the
+monolithic path, ``decompose=False``, which alone may report a goal unsolvable). A goal without
 a plan raises :class:`~task_agent.UnsolvableError` with the goal facts that can never hold and
 why; running out of time :class:`~task_agent.PlannerTimeoutError`; any other engine failure
 :class:`~task_agent.PlanningError` with the engine's log.
@@ -19,7 +25,9 @@ This sub-package is the task layer's only contact with planner libraries: import
 unified-planning (see docs/benchmarks.md, Planning). The code: ``_plan`` (:class:`Plan` and its
 steps, pure data), ``_convert`` (task to unified-planning problem, engine plan to steps),
 ``_engines`` (Kairos and Fast Downward), ``_planner`` (:class:`Planner`: environments,
-compression, fallback, errors), ``_exclusions`` (failed groundings) and ``_partial_order``.
+compression, fallback, errors), ``_parts`` (goal parts, the fact graph), ``_allocate`` (who
+takes which part), ``_decompose`` (the part-by-part solve), ``_exclusions`` (failed
+groundings) and ``_partial_order``.
 """
 
 from ._convert import to_unified_planning as to_unified_planning

@@ -10,8 +10,10 @@ small problem is widened step by step until one has a plan (:data:`LEVELS`):
 
 1. the part's ranked agents, one at a time (the first :data:`TRIES`), each alone over the
    elements within 3 hops;
-2. the same agents with the helpers and every agent whose hardware is within 5 hops (a robot
-   standing in the way, a hand-over partner), over the elements within 5 hops;
+2. *coupled*: the same agents with the helpers and every agent whose hardware is within 5
+   hops (a robot standing on the spot it needs, a hand-over partner); a pending part
+   assigned to one of those agents joins the problem, its elements widen the focus in turn,
+   until nothing more joins; the parts are then planned together as one problem;
 3. every agent, over the objects the lifted relevance analysis keeps
    (:func:`~task_agent.reachability.relevant_objects`).
 
@@ -39,7 +41,7 @@ from ._allocate import Allocation, Point, allocate, hardware
 from ._parts import FactGraph, parts
 from ._plan import PlanStep
 
-__all__ = ["LEVELS", "TRIES", "Decomposition", "solve_in_parts"]
+__all__ = ["LEVELS", "TRIES", "Decomposition", "Progress", "solve_in_parts"]
 
 LEVELS = ((3, 6), (5, 24))
 """(hops, hub) of the focus of the first two levels (see the module doc)."""
@@ -48,6 +50,10 @@ TRIES = 2
 
 Attempt = Callable[[PlanningTask, float], "tuple[bool, list[PlanStep]]"]
 """Solve a small problem within seconds: (solved, steps)."""
+
+
+Progress = Callable[[int, int], None]
+"""Told (parts planned, parts) as a decomposed solve goes."""
 
 
 class Decomposition(msgspec.Struct, kw_only=True):
@@ -191,9 +197,11 @@ def solve_in_parts(
     *,
     seconds: float,
     where: Mapping[str, Point] | None = None,
+    progress: Progress | None = None,
 ) -> Decomposition | None:
     """A plan for ``task`` made part by part (see the module doc), or None when a part has
-    no plan at any level or ``seconds`` run out: the caller then solves the whole task."""
+    no plan at any level or ``seconds`` run out: the caller then solves the whole task.
+    ``progress(done, parts)`` is called after each part is planned."""
     goal_parts = parts(task.goal)
     state = State(task.init)
     graph = FactGraph(state.facts, task.objects)
@@ -215,6 +223,8 @@ def solve_in_parts(
             part_steps, level, done = found
             widened += level > 0
             pending -= done
+            if progress is not None:
+                progress(len(goal_parts) - len(pending), len(goal_parts))
             for step in part_steps:
                 _, effects = apply(task, GroundStep(step.action, step.args), state)
                 graph.add(effects.adds)

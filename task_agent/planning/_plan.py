@@ -66,6 +66,18 @@ class PlanStats(msgspec.Struct, frozen=True, kw_only=True):
     widened: int = 0
     """Parts whose first small problem had no plan that holds on the full task."""
 
+    def summary(self) -> str:
+        """One line for a person: how long, how (parts or the whole task), how large."""
+        how = (
+            f"{self.parts} goal parts in {self.part_solves} small problems "
+            f"({self.widened} widened; the largest {self.objects_solved} of "
+            f"{self.objects} objects)"
+            if self.parts
+            else f"the whole task ({self.objects_solved} of {self.objects} objects"
+            f"{', after the compressed one failed' if self.fallback else ''})"
+        )
+        return f"planned with {self.engine} in {self.total_s:.2f} s: {how}"
+
 
 class Plan(msgspec.Struct, frozen=True, kw_only=True):
     steps: tuple[PlanStep, ...]

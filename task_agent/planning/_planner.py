@@ -6,7 +6,9 @@ the world-model replica, which only the loop may touch) and solves in a worker t
 ``anyio.to_thread.run_sync`` with the planner's capacity limiter (one solve at a time by
 default).
 
-Before solving, the task is compressed to the objects the goal can touch
+By default the task is first planned by parts (:mod:`._decompose`, within half the
+time-out); the rest of this paragraph is the whole-task path it falls back on. Before
+solving, the task is compressed to the objects the goal can touch
 (:func:`~task_agent.reachability.relevant_objects`), unless the goal itself names most objects
 (:data:`COMPRESS_BELOW`); the plan is replayed on the full task and, if that fails or the small
 task has no plan, the full task is solved. A goal without a plan
@@ -27,6 +29,7 @@ problems found). unified-planning is untyped: ``Any`` stays in the planner modul
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import threading
 import time
@@ -51,12 +54,16 @@ from ..learning import positions
 from ..reachability import diagnose, relevant_objects, replay
 from ._allocate import Point, hardware
 from ._convert import plan_steps, to_unified_planning
-from ._decompose import solve_in_parts
+from ._decompose import Progress, solve_in_parts
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
 from ._exclusions import exclude_steps
 from ._plan import Engine, Plan, PlanStats, PlanStep
 
-__all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "Planner"]
+__all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "PROGRESS_EVERY", "Planner"]
+
+_log = logging.getLogger(__name__)
+PROGRESS_EVERY = 1.0
+"""Seconds between the default progress log lines of a long decomposed solve."""
 
 ENVIRONMENT_SOLVES = 32
 """Solves per unified-planning environment before a planner starts a fresh one."""
@@ -73,6 +80,19 @@ class _Attempt(msgspec.Struct, kw_only=True):
     convert_s: float
     solve_s: float
     engine_s: float
+
+
+class _Logged:
+    """The default progress: an INFO line every :data:`PROGRESS_EVERY` s of planning."""
+
+    def __init__(self, start: float) -> None:
+        self.next = start + PROGRESS_EVERY
+
+    def __call__(self, done: int, parts: int) -> None:
+        now = time.perf_counter()
+        if now >= self.next and done < parts:
+            self.next = now + PROGRESS_EVERY
+            _log.info("planning: %d of %d goal parts planned", done, parts)
 
 
 class Planner:
@@ -134,20 +154,32 @@ class Planner:
 
     # ------------------------------------------------------------------ public API
 
-    def solve(self, task: PlanningTask, *, where: Mapping[str, Point] | None = None) -> Plan:
+    def solve(
+        self,
+        task: PlanningTask,
+        *,
+        where: Mapping[str, Point] | None = None,
+        progress: Progress | None = None,
+    ) -> Plan:
         """A plan for ``task`` (blocking; see the module doc for the errors). ``where``: the
-        (x, y) of elements that have a pose, for the allocation's bids. Thread-safe:
+        (x, y) of elements that have a pose, for the allocation's bids. ``progress(done,
+        parts)``: told as the goal's parts are planned (default: a log line every
+        :data:`PROGRESS_EVERY` seconds once planning has taken that long). Thread-safe:
         concurrent calls on one planner run one after the other."""
         with self._lock:
             start = time.perf_counter()
             if self.decompose:
-                plan = self._solve_in_parts(task, start, where)
+                plan = self._solve_in_parts(task, start, where, progress or _Logged(start))
                 if plan is not None:
                     return plan
             return self._solve(task, start)
 
     def _solve_in_parts(
-        self, task: PlanningTask, start: float, where: Mapping[str, Point] | None
+        self,
+        task: PlanningTask,
+        start: float,
+        where: Mapping[str, Point] | None,
+        progress: Progress,
     ) -> Plan | None:
         """The decomposed path (:mod:`._decompose`), within half the time-out."""
 
@@ -155,7 +187,9 @@ class Planner:
             result = self._attempt(sub, seconds)
             return result.status in SOLVED, result.steps
 
-        found = solve_in_parts(task, attempt, seconds=self.timeout / 2, where=where)
+        found = solve_in_parts(
+            task, attempt, seconds=self.timeout / 2, where=where, progress=progress
+        )
         if found is None or replay(task, [s.ground for s in found.steps])[1]:
             return None
         stats = PlanStats(
