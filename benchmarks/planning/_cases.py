@@ -115,7 +115,7 @@ def run_case(
     case = Case(robots=robots, parts=parts, goal=goal_kind, engine=engine)
     scene = kitting_scene(robots, parts)
     goal = make_goal(scene, goal_kind)
-    planner = Planner(engine=engine, timeout=timeout)
+    planner = Planner(engine=engine, timeout=timeout, decompose=False)
     try:
         _, _, plan = _ours(scene, goal, planner)  # warm-up: imports, caches
     except PlannerTimeoutError:

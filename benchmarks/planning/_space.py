@@ -57,7 +57,7 @@ def run_space(
     robots: int, parts: int, goal_kind: str, engine: Engine, reps: int, timeout: float
 ) -> SpaceCase:
     """Discovery + generation + solve, with and without robot limits, alternating."""
-    planner = Planner(engine=engine, timeout=timeout)
+    planner = Planner(engine=engine, timeout=timeout, decompose=False)
     shared, open_ = _scene(robots, parts, shared=True), _scene(robots, parts, shared=False)
     _plan_ms(shared, goal_kind, planner)  # warm-up
     _plan_ms(open_, goal_kind, planner)
