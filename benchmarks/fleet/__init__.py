@@ -8,12 +8,13 @@ in a fresh child process (so its peak memory is its own):
 - ``all``: one gear of its own cell into each robot's kit (one part per robot);
 - ``one``: the same for robot 1 only, in the world of ``N`` robots.
 
-Each goal is planned by the decomposed planner (the default) and, where it finishes within
-``--monolithic-limit`` seconds, by the monolithic one (the oracle): the time to build the
-task and plan (median of ``--reps``, after a warm-up on the same world), the partial order's
-estimated makespan of both, and the child's peak RSS. The same-run baselines: a goal for one
-robot in a world of one robot (the 2x target of a one-robot goal in a large world) and the
-monolithic makespan (the 10 % target).
+Each goal is planned as the task agent plans it (``Planner.plan_sync``: the task built from
+the discovered agents and the world model, then solved) by the decomposed planner (the
+default) and, where it finishes within ``--monolithic-limit`` seconds, by the monolithic one
+(the oracle): the time to build the task and plan (median of ``--reps``, after a warm-up on
+the same world), the partial order's estimated makespan of both, and the child's peak RSS.
+The same-run baselines: a goal for one robot in a world of one robot (the 2x target of a
+one-robot goal in a large world) and the monolithic makespan (the 10 % target).
 
 ``_run`` holds the whole benchmark: the child's measurement, the rows, the command line.
 """

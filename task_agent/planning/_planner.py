@@ -57,6 +57,7 @@ from ._convert import plan_steps, to_unified_planning
 from ._decompose import Progress, solve_in_parts
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
 from ._exclusions import exclude_steps
+from ._nearby import nearby_agents
 from ._plan import Engine, Plan, PlanStats, PlanStep
 
 __all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "PROGRESS_EVERY", "Planner"]
@@ -271,11 +272,17 @@ class Planner:
     ) -> Plan:
         """Build the task from the agents and the world model, then :meth:`solve` it.
         ``exclude``: grounded steps (agent, skill, parameters) the plan must not contain
-        (:func:`~task_agent.planning.exclude_steps`)."""
-        from ..domain import build_task
-
-        task = exclude_steps(build_task(agents, view, goal, registry=registry), exclude)
-        return self.solve(task, where=_where(task, view) if self.decompose else None)
+        (:func:`~task_agent.planning.exclude_steps`). Planning by parts, the task is built
+        for the agents near the goal first (:func:`~._nearby.nearby_agents`), then for all
+        of them if those have no plan."""
+        for chosen in self._agent_sets(agents, view, goal):
+            task, where = self._build(chosen, view, goal, registry, exclude)
+            try:
+                return self.solve(task, where=where)
+            except (UnsolvableError, PlannerTimeoutError):
+                if chosen is agents:
+                    raise
+        raise AssertionError("unreachable: the last agent set is every agent")
 
     async def plan(
         self,
@@ -286,16 +293,39 @@ class Planner:
         registry: ConditionRegistry | None = None,
         exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
     ) -> Plan:
-        """:meth:`plan_sync` without blocking the loop: the task is built here (it reads
+        """:meth:`plan_sync` without blocking the loop: each task is built here (it reads
         ``view``), the solve runs in a worker thread under the limiter."""
+        limiter = self._limiter or anyio.CapacityLimiter(1)
+        self._limiter = limiter
+        for chosen in self._agent_sets(agents, view, goal):
+            task, where = self._build(chosen, view, goal, registry, exclude)
+            solve = functools.partial(self.solve, task, where=where)
+            try:
+                return await anyio.to_thread.run_sync(solve, limiter=limiter)
+            except (UnsolvableError, PlannerTimeoutError):
+                if chosen is agents:
+                    raise
+                _log.debug("no plan with the %d agents near the goal; with all", len(chosen))
+        raise AssertionError("unreachable: the last agent set is every agent")
+
+    def _agent_sets(
+        self, agents: Sequence[AgentInfo], view: WorldView, goal: Goal
+    ) -> list[Sequence[AgentInfo]]:
+        near = nearby_agents(agents, view, goal) if self.decompose else None
+        return [agents] if near is None else [near, agents]
+
+    def _build(
+        self,
+        agents: Sequence[AgentInfo],
+        view: WorldView,
+        goal: Goal,
+        registry: ConditionRegistry | None,
+        exclude: Sequence[tuple[str, str, Mapping[str, object]]],
+    ) -> tuple[PlanningTask, dict[str, Point] | None]:
         from ..domain import build_task
 
         task = exclude_steps(build_task(agents, view, goal, registry=registry), exclude)
-        where = _where(task, view) if self.decompose else None
-        limiter = self._limiter or anyio.CapacityLimiter(1)
-        self._limiter = limiter
-        solve = functools.partial(self.solve, task, where=where)
-        return await anyio.to_thread.run_sync(solve, limiter=limiter)
+        return task, _where(task, view) if self.decompose else None
 
     def emit_pddl(
         self, task: PlanningTask, directory: Path | str, *, compressed: bool = False

@@ -11,7 +11,9 @@ from task_agent.discovery import agents_from_view
 from task_agent.domain import Lit, PlanningTask, build_task
 from task_agent.learning import positions
 from task_agent.planning import Plan, Planner, to_partial_order
+from task_agent.planning import _planner as planner_module
 from task_agent.planning._allocate import _assign, allocate
+from task_agent.planning._nearby import nearby_agents
 from task_agent.planning._parts import FactGraph, parts
 from task_agent.reachability import replay
 from tests.assets.planning.fleet import Fleet, fleet_scene, one_gear_each
@@ -135,3 +137,27 @@ def test_kit_goals_across_cells_agree_with_the_oracle(swap: int) -> None:
     whole = Planner(decompose=False).solve(task)
     assert valid(split) and valid(whole)
     assert split.stats.parts == 3
+
+
+def test_the_task_is_built_for_the_agents_near_a_small_goal() -> None:
+    fleet = fleet_scene(30)
+    goal = parse_goal(f"contain({fleet.kits[7]}, {fleet.gears[7][1]})", fleet.view)
+    agents = agents_from_view(fleet.view)
+    assert [a.name for a in nearby_agents(agents, fleet.view, goal) or []] == ["r8"]
+    plan = Planner().plan_sync(agents, fleet.view, goal)
+    assert valid(plan) and {s.agent for s in plan.steps} == {"r8"}
+    assert {a.agent for a in plan.task.actions.values()} == {"r8"}
+    # a goal for most of the fleet is built for all of it at once
+    assert nearby_agents(agents, fleet.view, one_gear_each(fleet, range(20))) is None
+
+
+def test_agents_left_out_are_taken_in_when_the_near_ones_have_no_plan(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    fleet = fleet_scene(10)
+    goal = parse_goal(f"contain({fleet.kits[3]}, {fleet.gears[3][0]})", fleet.view)
+    agents = agents_from_view(fleet.view)
+    # only r1 is "near": it cannot fill r4's kit, so the task is built again for everyone
+    monkeypatch.setattr(planner_module, "nearby_agents", lambda a, v, g: [agents[0]])
+    plan = Planner().plan_sync(agents, fleet.view, goal)
+    assert valid(plan) and {s.agent for s in plan.steps} == {"r4"}
