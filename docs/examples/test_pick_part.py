@@ -19,7 +19,7 @@ from skill_agent.protocol import StartRun, WmWriteEntry
 from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillRegistry
 from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
-from wm_store.protocol import Relation, UpdateElement
+from wm_store.protocol import Relation, UpdateElement, Value
 from wm_store.server import WmService, WmStore
 
 HERE = Path(__file__).resolve().parent
@@ -79,7 +79,7 @@ async def test_pick_part_in_simulated_outcome_mode() -> None:
 async def test_a_stop_opens_the_gripper_and_the_event_log_records_it() -> None:
     async with picker() as (core, wm):
         gear = wm.resolve_element(type="Gear")[0].id
-        params = {"part": gear, "motion_time": 30.0}
+        params: dict[str, Value] = {"part": gear, "motion_time": 30.0}
         started = await core.start(StartRun(skill="pick_part", params=params))
         with anyio.fail_after(5):
             result = await core.stop(started.run_id)

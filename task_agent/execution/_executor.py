@@ -127,6 +127,7 @@ class PlanSource(Protocol):
         goal: Goal,
         *,
         exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
+        progress: Callable[[int, int], None] | None = None,
     ) -> Plan: ...
 
 
@@ -188,6 +189,8 @@ class Executor:
         self.name = ""
         self.outcome: TaskOutcome = "running"
         self.message = ""
+        self.planning = ""
+        """While a long plan is made: how far it got (set from the planner's thread)."""
         self.reasons: list[str] = []
         """Why each replan happened."""
         self.started_at = time.time()
@@ -253,7 +256,7 @@ class Executor:
             finished_at=self.finished_at,
             replans=self.replans,
             steps_run=self.steps.steps_run,
-            message=self.message,
+            message=self.message or self.planning,
             check=self.check,
             paused=self.paused and self.outcome == "running",
             partial=self.partial,
@@ -490,19 +493,22 @@ class Executor:
         busy = self.claims.busy(self.task_id)[0] if self.claims is not None else frozenset()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
+        plan_ = functools.partial(self.planner.plan, exclude=failed, progress=self._planning)
         try:  # around what other tasks hold first, else with it (and wait for it: _claim)
-            plan = await self.planner.plan(free if busy else agents, self.wm, goal, exclude=failed)
+            plan = await plan_(free if busy else agents, self.wm, goal)
         except UnsolvableError:
             if busy:
                 _log.info(
                     "task %s: no plan without %s (busy); trying with them", self.task_id, busy
                 )
-                plan = await self.planner.plan(agents, self.wm, goal, exclude=failed)
+                plan = await plan_(agents, self.wm, goal)
             elif excluded:
                 _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
-                plan = await self.planner.plan(self._agents(set()), self.wm, goal, exclude=failed)
+                plan = await plan_(self._agents(set()), self.wm, goal)
             else:
                 raise
+        finally:
+            self.planning = ""
         timing = self.learning.timer(plan.task.objects)
         order = await anyio.to_thread.run_sync(
             functools.partial(to_partial_order, plan, timing=timing)
@@ -521,6 +527,10 @@ class Executor:
             parts=plan.stats.parts,
         )
         return steps
+
+    def _planning(self, done: int, parts: int) -> None:
+        """The planner's progress (its worker thread): shown by ``task status`` / ``list``."""
+        self.planning = f"planning: {done} of {parts} goal parts planned"
 
     async def _outage_during(self, failure: StepOutcome) -> bool:
         """Whether a lost router or a partition overlapped the failed step (its failure is

@@ -4,15 +4,14 @@ the plan as a partial order the robots can run in parallel.
 :class:`Planner` solves a task with Kairos (default, in-process) or Fast Downward
 (``engine="fast-downward"``, a child process per call), within a time-out, and returns a
 :class:`Plan` of agent-tagged :class:`PlanStep` values (with :class:`PlanStats`). By default
-it plans *by parts* (``decompose=True``): the goal's independent parts are allocated to agents
-first (a least-cost assignment over bids from the scene graph and the poses) and planned one
-after the other as small problems over the elements near each part, widened until a plan
-holds on the full task (coupled parts, such as two robots that need each other's spot, are
-planned together); when a part has no plan at any width the whole task is solved (the
-monolithic path, ``decompose=False``, which alone may report a goal unsolvable). A goal without
-a plan raises :class:`~task_agent.UnsolvableError` with the goal facts that can never hold and
-why; running out of time :class:`~task_agent.PlannerTimeoutError`; any other engine failure
-:class:`~task_agent.PlanningError` with the engine's log.
+it plans a task of :data:`DECOMPOSE_FROM` objects or more *by parts* (``decompose=True``):
+the goal's independent parts are allocated to agents first (a least-cost assignment over
+bids from the scene graph and the poses) and planned one after the other as small problems
+over the elements near each part, widened until a plan holds on the full task (coupled
+parts, such as two robots that need each other's spot, are planned together); when a part
+has no plan at any width the whole task is solved (the monolithic path,
+``decompose=False``, which alone may report a goal unsolvable). For a goal that needs few
+agents, the task is built for the agents near it first.
 
 :func:`to_partial_order` relaxes the plan's sequence into a :class:`PartialOrderPlan`: the
 :class:`Edge` values that must stay ordered (causal links, threats, conflicts, shared
@@ -45,11 +44,13 @@ from ._plan import Plan as Plan
 from ._plan import PlanStats as PlanStats
 from ._plan import PlanStep as PlanStep
 from ._planner import COMPRESS_BELOW as COMPRESS_BELOW
+from ._planner import DECOMPOSE_FROM as DECOMPOSE_FROM
 from ._planner import ENVIRONMENT_SOLVES as ENVIRONMENT_SOLVES
 from ._planner import Planner as Planner
 
 __all__ = [
     "COMPRESS_BELOW",
+    "DECOMPOSE_FROM",
     "ENVIRONMENT_SOLVES",
     "FD_SEARCH",
     "Edge",

@@ -60,9 +60,12 @@ from ._exclusions import exclude_steps
 from ._nearby import nearby_agents
 from ._plan import Engine, Plan, PlanStats, PlanStep
 
-__all__ = ["COMPRESS_BELOW", "ENVIRONMENT_SOLVES", "PROGRESS_EVERY", "Planner"]
+__all__ = ["COMPRESS_BELOW", "DECOMPOSE_FROM", "ENVIRONMENT_SOLVES", "PROGRESS_EVERY", "Planner"]
 
 _log = logging.getLogger(__name__)
+DECOMPOSE_FROM = 100
+"""Objects from which a task is planned by parts: a smaller one is solved whole faster than
+its parts one by one (see docs/benchmarks.md, Planning at fleet scale)."""
 PROGRESS_EVERY = 1.0
 """Seconds between the default progress log lines of a long decomposed solve."""
 
@@ -84,16 +87,20 @@ class _Attempt(msgspec.Struct, kw_only=True):
 
 
 class _Logged:
-    """The default progress: an INFO line every :data:`PROGRESS_EVERY` s of planning."""
+    """Progress once planning has taken :data:`PROGRESS_EVERY` s, then at that pace: an
+    INFO line, and the caller's ``progress`` if given."""
 
-    def __init__(self, start: float) -> None:
+    def __init__(self, start: float, progress: Progress | None) -> None:
         self.next = start + PROGRESS_EVERY
+        self.progress = progress
 
     def __call__(self, done: int, parts: int) -> None:
         now = time.perf_counter()
         if now >= self.next and done < parts:
             self.next = now + PROGRESS_EVERY
             _log.info("planning: %d of %d goal parts planned", done, parts)
+            if self.progress is not None:
+                self.progress(done, parts)
 
 
 class Planner:
@@ -101,8 +108,10 @@ class Planner:
 
     ``engine``: ``"kairos"`` (default) or ``"fast-downward"``. ``timeout``: seconds per
     :meth:`solve` (both attempts when the compressed task falls back to the full one).
-    ``compress``: solve over the objects the goal can touch first. ``limiter``: bounds the
-    concurrent solves of :meth:`plan` (default: one at a time, its own)."""
+    ``compress``: solve over the objects the goal can touch first. ``decompose``: plan
+    a task of ``decompose_from`` objects or more by parts (:mod:`._decompose`).
+    ``limiter``: bounds the concurrent solves of :meth:`plan` (default: one at a time,
+    its own)."""
 
     def __init__(
         self,
@@ -111,6 +120,7 @@ class Planner:
         timeout: float = 30.0,
         compress: bool = True,
         decompose: bool = True,
+        decompose_from: int = DECOMPOSE_FROM,
         limiter: anyio.CapacityLimiter | None = None,
     ) -> None:
         if engine not in ("kairos", "fast-downward"):
@@ -119,6 +129,7 @@ class Planner:
         self.timeout = timeout
         self.compress = compress
         self.decompose = decompose
+        self.decompose_from = decompose_from
         self._limiter = limiter
         self._lock = threading.Lock()
         self._env: Any = None
@@ -164,13 +175,14 @@ class Planner:
     ) -> Plan:
         """A plan for ``task`` (blocking; see the module doc for the errors). ``where``: the
         (x, y) of elements that have a pose, for the allocation's bids. ``progress(done,
-        parts)``: told as the goal's parts are planned (default: a log line every
-        :data:`PROGRESS_EVERY` seconds once planning has taken that long). Thread-safe:
-        concurrent calls on one planner run one after the other."""
+        parts)``: told how many of the goal's parts are planned, every
+        :data:`PROGRESS_EVERY` seconds once planning has taken that long (a log line too).
+        Thread-safe: concurrent calls on one planner run one after the other."""
         with self._lock:
             start = time.perf_counter()
-            if self.decompose:
-                plan = self._solve_in_parts(task, start, where, progress or _Logged(start))
+            if self.decompose and len(task.objects) >= self.decompose_from:
+                told = _Logged(start, progress)
+                plan = self._solve_in_parts(task, start, where, told)
                 if plan is not None:
                     return plan
             return self._solve(task, start)
@@ -292,14 +304,16 @@ class Planner:
         *,
         registry: ConditionRegistry | None = None,
         exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
+        progress: Progress | None = None,
     ) -> Plan:
         """:meth:`plan_sync` without blocking the loop: each task is built here (it reads
-        ``view``), the solve runs in a worker thread under the limiter."""
+        ``view``), the solve runs in a worker thread under the limiter (``progress``: see
+        :meth:`solve`; called from that thread)."""
         limiter = self._limiter or anyio.CapacityLimiter(1)
         self._limiter = limiter
         for chosen in self._agent_sets(agents, view, goal):
             task, where = self._build(chosen, view, goal, registry, exclude)
-            solve = functools.partial(self.solve, task, where=where)
+            solve = functools.partial(self.solve, task, where=where, progress=progress)
             try:
                 return await anyio.to_thread.run_sync(solve, limiter=limiter)
             except (UnsolvableError, PlannerTimeoutError):

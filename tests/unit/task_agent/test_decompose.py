@@ -19,6 +19,9 @@ from task_agent.reachability import replay
 from tests.assets.planning.fleet import Fleet, fleet_scene, one_gear_each
 from tests.unit.task_agent.test_planner import oven_task
 
+SPLIT = Planner(decompose_from=0)
+"""Plans by parts whatever the task's size."""
+
 
 def task_of(fleet: Fleet, text: str) -> PlanningTask:
     goal = parse_goal(text, fleet.view)
@@ -76,7 +79,7 @@ def test_the_decomposed_plan_matches_the_monolithic_one() -> None:
     goal = one_gear_each(fleet)
     task = build_task(agents_from_view(fleet.view), fleet.view, goal)
     where = positions(fleet.view, task.objects)
-    split = Planner().solve(task, where=where)
+    split = SPLIT.solve(task, where=where)
     whole = Planner(decompose=False).solve(task)
     assert split.stats.parts == 6 and split.stats.widened == 0
     assert whole.stats.parts == 0
@@ -90,7 +93,7 @@ def test_the_decomposed_plan_matches_the_monolithic_one() -> None:
 def test_a_goal_for_one_robot_stays_small_in_a_large_world() -> None:
     fleet = fleet_scene(30)
     task = task_of(fleet, f"contain({fleet.kits[7]}, {fleet.gears[7][1]})")
-    plan = Planner().solve(task)
+    plan = SPLIT.solve(task)
     assert valid(plan) and {s.agent for s in plan.steps} == {"r8"}
     assert plan.stats.parts == 1 and plan.stats.objects_solved <= 15
 
@@ -105,14 +108,14 @@ def test_a_robot_in_the_way_is_planned_with_the_part_that_needs_its_spot() -> No
         f"contain({fleet.kits[1]}, {fleet.gears[0][0]})"
     )
     task = task_of(fleet, text)
-    plan = Planner().solve(task)
+    plan = SPLIT.solve(task)
     assert valid(plan)
     assert plan.stats.parts == 2 and plan.stats.widened >= 1
 
 
 def test_a_helper_agent_joins_the_part_that_needs_it() -> None:
     _, task = oven_task(can_open=True)
-    plan = Planner().solve(task)
+    plan = SPLIT.solve(task)
     assert valid(plan)
     assert "oven-agent" in {s.agent for s in plan.steps}
     assert plan.stats.parts >= 1 and plan.stats.widened >= 1
@@ -122,7 +125,7 @@ def test_an_unsolvable_goal_is_reported_by_the_whole_task() -> None:
     # a gear in a closed oven nobody can open: every part fails, the whole task says why
     _, task = oven_task(can_open=False)
     with pytest.raises(UnsolvableError, match="unreachable"):
-        Planner(timeout=20).solve(task)
+        Planner(timeout=20, decompose_from=0).solve(task)
 
 
 @pytest.mark.parametrize("swap", [0, 1, 2])
@@ -133,7 +136,7 @@ def test_kit_goals_across_cells_agree_with_the_oracle(swap: int) -> None:
     chosen = [(i, (i + swap) % 3) for i in range(3)]
     text = " and ".join(f"contain({fleet.kits[i]}, {fleet.gears[j][0]})" for i, j in chosen)
     task = task_of(fleet, text)
-    split = Planner().solve(task)
+    split = SPLIT.solve(task)
     whole = Planner(decompose=False).solve(task)
     assert valid(split) and valid(whole)
     assert split.stats.parts == 3
@@ -144,7 +147,7 @@ def test_the_task_is_built_for_the_agents_near_a_small_goal() -> None:
     goal = parse_goal(f"contain({fleet.kits[7]}, {fleet.gears[7][1]})", fleet.view)
     agents = agents_from_view(fleet.view)
     assert [a.name for a in nearby_agents(agents, fleet.view, goal) or []] == ["r8"]
-    plan = Planner().plan_sync(agents, fleet.view, goal)
+    plan = SPLIT.plan_sync(agents, fleet.view, goal)
     assert valid(plan) and {s.agent for s in plan.steps} == {"r8"}
     assert {a.agent for a in plan.task.actions.values()} == {"r8"}
     # a goal for most of the fleet is built for all of it at once
@@ -159,5 +162,5 @@ def test_agents_left_out_are_taken_in_when_the_near_ones_have_no_plan(
     agents = agents_from_view(fleet.view)
     # only r1 is "near": it cannot fill r4's kit, so the task is built again for everyone
     monkeypatch.setattr(planner_module, "nearby_agents", lambda a, v, g: [agents[0]])
-    plan = Planner().plan_sync(agents, fleet.view, goal)
+    plan = SPLIT.plan_sync(agents, fleet.view, goal)
     assert valid(plan) and {s.agent for s in plan.steps} == {"r4"}
