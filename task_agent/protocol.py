@@ -161,10 +161,14 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
     operator_fallback: bool = False
     """When a skill fails, ask the operator before replanning."""
     operator_fallback_skills: frozenset[str] = frozenset()
-    priority: int = 0
-    """Among tasks that wait for the same robots or objects, a higher priority goes first."""
     """Ask the operator only when one of these skills fails (by skill name, e.g. ``pick``);
     the others are replanned. Ignored when ``operator_fallback`` is set (every skill)."""
+    priority: int = 0
+    """Among tasks that wait for the same robots or objects, a higher priority goes first."""
+    preemptible: bool = True
+    """A task of higher priority that waits for what this task holds may take it at this
+    task's next step boundary; this task then waits and plans again (goals only; see
+    :mod:`task_agent.claims`). With equal priorities (the default) nothing is preempted."""
 
 
 class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):

@@ -181,8 +181,12 @@ class TaskService:
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
         durations: DurationBook | None = None,
+        preemption: bool = True,
     ) -> None:
         self.wm = wm
+        self.preemption = preemption
+        """A task of higher priority may take a running task's claim at that task's next step
+        boundary (tasks submitted ``TaskOptions.preemptible``; :mod:`task_agent.claims`)."""
         self.durations = durations or DurationBook()
         """Learned run times, shared by every task (:mod:`task_agent.learning`)."""
         self.max_events = max_events
@@ -320,6 +324,7 @@ class TaskService:
             max_events=self.max_events,
             claims=self.claims,
             durations=self.durations,
+            preemption=self.preemption,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:

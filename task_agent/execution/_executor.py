@@ -39,6 +39,18 @@ step is kept with its cause and the state of its things, and later plans exclude
 state holds, so no step fails the same way twice in a task; with nothing else left the task
 ends saying which step failed on which robot and why.
 
+**Claims** (:mod:`task_agent.claims`, ``claims``): before its steps run, a task holds the
+agents and objects they need, waiting while another task holds any of them (``waiting`` says
+for what); a task that had to wait plans again from the world model as it is once its claim
+is granted (the other task changed it meanwhile). **Preemption** (``preemption`` and
+``TaskOptions.preemptible``, both on by default; goals only, not task files): when a task of
+higher priority waits for what this one holds, this task gives way at its next step boundary
+(:meth:`StepScheduler.give_way <task_agent.execution.StepScheduler.give_way>`: its steps in
+flight finish, then only steps that finish what one of its robots holds start, so no robot
+is left holding a part), gives its claim back and waits (``TaskPaused`` with the reason;
+``waiting`` says preempted by which task), re-acquires its claim (``TaskResumed``) and plans
+again from the world model as it is; neither the wait nor the new plan counts as a replan.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
 ``StepProgress`` / ``StepFinished``, ``Replanning``, ``SafeState`` (after an unfinished
 ending), one ``TaskFinished``.
@@ -90,7 +102,7 @@ from ._claiming import claim_of, free_agents
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
-from ._safe_state import SafeStatePhase
+from ._safe_state import SafeStatePhase, held_by
 from ._state import (
     StepSpec,
     WorldModel,
@@ -152,6 +164,7 @@ class Executor:
         max_events: int = MAX_TASK_EVENTS,
         claims: ClaimBook | None = None,
         durations: DurationBook | None = None,
+        preemption: bool = True,
     ) -> None:
         self.task_id = task_id
         self.claims = claims
@@ -167,6 +180,9 @@ class Executor:
         self.wm = wm
         self.discovery = discovery
         self.options = options or TaskOptions()
+        self.preemptible = claims is not None and preemption and self.options.preemptible
+        """A task of higher priority may take this task's claim at a step boundary (a goal's
+        task: one that can plan again; see the module doc)."""
         self.planner = planner
         self.wm_timeout = wm_timeout
         self.agent_wait = agent_wait
@@ -267,11 +283,11 @@ class Executor:
         claim = self.claims.claim_of(self.task_id) if self.claims is not None else None
         return set() if claim is None else set(claim.agents) | set(claim.objects)
 
-    async def _claim(self, steps: list[StepSpec]) -> None:
+    async def _claim(self, steps: list[StepSpec], *, preemptible: bool = False) -> bool:
         """Hold what ``steps`` need before they run, waiting (``waiting`` says for what) while
-        other tasks hold any of it (:mod:`task_agent.claims`)."""
+        other tasks hold any of it (:mod:`task_agent.claims`). True if it had to wait."""
         if self.claims is None:
-            return
+            return False
         agents, objects = claim_of(steps, self.discovery.agents(include_unavailable=True), self.wm)
         held_agents, held_objects = self.claims.busy(self.task_id)
         blocked = sorted((agents & held_agents) | (objects & held_objects))
@@ -279,9 +295,72 @@ class Executor:
             self.waiting = f"{', '.join(blocked)} (held by another task)"
             _log.info("task %s waits for %s", self.task_id, self.waiting)
         try:
-            await self.claims.acquire(self.task_id, agents, objects, priority=self.options.priority)
+            claim = await self.claims.acquire(
+                self.task_id,
+                agents,
+                objects,
+                priority=self.options.priority,
+                preemptible=preemptible,
+            )
         finally:
             self.waiting = ""
+        return claim.waited
+
+    async def _run_steps(self, steps: list[StepSpec]) -> StepOutcome | None:
+        """:meth:`StepScheduler.run`, giving way at a step boundary when a task of higher
+        priority asks for the claim (a preemptible task)."""
+        if not self.preemptible:
+            return await self.steps.run(steps)
+        async with anyio.create_task_group() as tg:
+            tg.start_soon(self._watch_preemption)
+            failure = await self.steps.run(steps)
+            tg.cancel_scope.cancel()
+        return failure
+
+    async def _watch_preemption(self) -> None:
+        assert self.claims is not None
+        by = await self.claims.preempted(self.task_id)
+        _log.info("task %s gives way to task %s at its next step boundary", self.task_id, by)
+        self.steps.give_way(self._boundary)
+
+    async def _boundary(self, ready: list[StepSpec], running: bool) -> list[StepSpec]:
+        """While giving way: the ready steps of robots that hold something (they finish what
+        they carry); when no step runs and none of those is ready while a robot of the task
+        still holds something, every ready step (none is left holding a part)."""
+        await self._catch_up()
+        agents = self.discovery.agents(include_unavailable=True)
+        holding = {a.name for a in agents if a.name in self.steps.used and held_by(a, self.wm)}
+        finishing = [s for s in ready if s.agent in holding]
+        if finishing or running or not holding:
+            return finishing
+        return ready
+
+    async def _give_way(self) -> None:
+        """Preempted at a step boundary: give the claim back, wait until the task that asked
+        for it (and any other of higher priority) is done with it, hold it again."""
+        assert self.claims is not None
+        held = self.claims.claim_of(self.task_id)
+        by = self.claims.asked_by(self.task_id)
+        if held is None:
+            return
+        priority = next((c.priority for c in self.claims.waiting() if c.task_id == by), None)
+        of = f" (priority {priority})" if priority is not None else ""
+        reason = f"preempted by task {by}{of} at a step boundary"
+        self.events.emit(TaskPaused, reason=reason, runs=[])
+        things = ", ".join(sorted(held.agents | held.objects))
+        self.waiting = f"{things} (preempted by task {by}{of})"
+        _log.info("task %s: %s; waits for %s", self.task_id, reason, things)
+        try:
+            await self.claims.acquire(
+                self.task_id,
+                held.agents,
+                held.objects,
+                priority=self.options.priority,
+                preemptible=True,
+            )
+        finally:
+            self.waiting = ""
+        self.events.emit(TaskResumed, runs=[])
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
         """Plan and run until ``goal`` holds (or fails, is unsolvable or aborted)."""
@@ -363,6 +442,8 @@ class Executor:
         while True:
             try:
                 steps = await self._plan(target, attempt, excluded)
+                while await self._claim(steps, preemptible=self.preemptible):
+                    steps = await self._plan(target, attempt, excluded)  # changed meanwhile
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
                     return "unsolvable", str(e)
@@ -378,8 +459,10 @@ class Executor:
                 continue
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
-            await self._claim(steps)
-            failure = await self.steps.run(steps)
+            failure = await self._run_steps(steps)
+            if self.steps.gave_way:
+                await self._give_way()
+                continue
             if failure is None:
                 await self._catch_up()
                 unmet = unmet_goal(target, self.wm)
