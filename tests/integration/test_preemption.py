@@ -20,7 +20,6 @@ from meshlink import MeshConfig, open_mesh
 from task_agent import TaskClient
 from task_agent.protocol import (
     StepFinished,
-    StepStarted,
     TaskEvent,
     TaskFinished,
     TaskOptions,
