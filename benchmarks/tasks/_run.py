@@ -22,9 +22,16 @@ from benchmarks.common import (
     machine_info,
 )
 
-from ._workload import CASES, MODES, Run, run_case
+from ._workload import CASES, MODES, Preempted, Run, run_case, run_preemption
 
-__all__ = ["main", "measure", "rows"]
+__all__ = ["Results", "main", "measure", "rows"]
+
+PREEMPTION = "preemption"
+
+
+class Results(msgspec.Struct, kw_only=True):
+    runs: list[Run] = []
+    preemption: list[Preempted] = []
 
 
 async def measure(
@@ -33,16 +40,33 @@ async def measure(
     rounds: int,
     time_scale: float,
     say: Callable[[str], None] = print,
-) -> list[Run]:
-    """``rounds`` runs of each case in each mode; the mode that goes first alternates."""
-    runs: list[Run] = []
+) -> Results:
+    """``rounds`` runs of each case in each mode (and of the preemption case with and
+    without preemption); the mode that goes first alternates."""
+    out = Results()
     for r in range(rounds):
         for case in cases:
+            if case == PREEMPTION:
+                for preempt in (True, False) if r % 2 == 0 else (False, True):
+                    p = await run_preemption(preempt, robots, time_scale)
+                    out.preemption.append(p)
+                    say(_preempted_line(p))
+                continue
             for mode in MODES if r % 2 == 0 else MODES[::-1]:
                 run = await run_case(case, mode, robots, time_scale)
-                runs.append(run)
+                out.runs.append(run)
                 say(_line(run))
-    return runs
+    return out
+
+
+def _preempted_line(p: Preempted) -> str:
+    how = "preemptible" if p.preemption else "not preemptible"
+    return (
+        f"preemption, long task {how}: {p.outcomes}; urgent task {p.high_turnaround:.2f} s "
+        f"from submission to end, long task {p.low_makespan:.2f} s; "
+        f"{'urgent first' if p.high_first else 'long first'}"
+        + ("; the long task gave way" if p.gave_way else "")
+    )
 
 
 def _line(run: Run) -> str:
@@ -59,9 +83,10 @@ def _of(runs: Sequence[Run], case: str, mode: str) -> list[Run]:
     return [r for r in runs if r.case == case and r.mode == mode]
 
 
-def rows(runs: Sequence[Run]) -> list[Row]:
+def rows(runs: Sequence[Run], preempted: Sequence[Preempted] = ()) -> list[Row]:
     """Per case: tasks per minute and makespan at once against one at a time (medians; the
-    ratio is the median of the rounds' ratios)."""
+    ratio is the median of the rounds' ratios); the preemption case's turnarounds with and
+    without preemption."""
     out = []
     for case in dict.fromkeys(r.case for r in runs):
         seq, conc = _of(runs, case, "sequential"), _of(runs, case, "concurrent")
@@ -88,7 +113,30 @@ def rows(runs: Sequence[Run]) -> list[Row]:
                 paired_ratio=statistics.median(1 / p for p in pairs),
             ),
         ]
-    return out
+    return out + (_preemption_rows(preempted) if preempted else [])
+
+
+def _preemption_rows(preempted: Sequence[Preempted]) -> list[Row]:
+    yes = [p for p in preempted if p.preemption]
+    no = [p for p in preempted if not p.preemption]
+    pairs = list(zip(yes, no, strict=False))
+
+    def row(figure: str, of: Callable[[Preempted], float]) -> Row:
+        return Row(
+            figure=f"preemption: {figure}",
+            value=statistics.median(of(p) for p in yes),
+            unit="s",
+            baseline="not preemptible",
+            baseline_value=statistics.median(of(p) for p in no),
+            note="long task 9 steps on r1, urgent 3",
+            paired_ratio=statistics.median(of(a) / of(b) for a, b in pairs),
+        )
+
+    return [
+        row("urgent task, submission to end", lambda p: p.high_turnaround),
+        row("long task, submission to end", lambda p: p.low_makespan),
+        row("both tasks' makespan", lambda p: p.makespan),
+    ]
 
 
 def details(runs: Sequence[Run]) -> str:
@@ -114,10 +162,16 @@ def details(runs: Sequence[Run]) -> str:
     return format_grid(head, body)
 
 
-def verdict(runs: Sequence[Run]) -> list[str]:
+def verdict(runs: Sequence[Run], preempted: Sequence[Preempted] = ()) -> list[str]:
     """What must hold of every run: every task succeeded, no robot ran steps of two tasks at
-    once, and in ``overlapping`` at once the second task waited (its claim) and ended second."""
+    once, in ``overlapping`` at once the second task waited (its claim) and ended second, and
+    a preemptible long task gave way to the urgent one, which ended first."""
     problems = [f"{r.case} {r.mode}: {r.outcomes}" for r in runs if not r.succeeded]
+    for p in preempted:
+        if not p.succeeded or p.interleaved:
+            problems.append(f"preemption: {p.outcomes}, two tasks on {p.interleaved}")
+        if p.preemption and not (p.gave_way and p.high_first):
+            problems.append("preemption: the long task did not give way to the urgent one")
     problems += [f"{r.case} {r.mode}: two tasks on {r.interleaved}" for r in runs if r.interleaved]
     for r in _of(runs, "overlapping", "concurrent"):
         second = list(r.outcomes)[1]
@@ -128,7 +182,9 @@ def verdict(runs: Sequence[Run]) -> list[str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks.tasks", description=__doc__)
-    p.add_argument("--case", action="append", choices=CASES, help="default: every case")
+    p.add_argument(
+        "--case", action="append", choices=[*CASES, PREEMPTION], help="default: every case"
+    )
     p.add_argument("--robots", type=int, default=4, help="robots (and tasks per case)")
     p.add_argument("--rounds", type=int, default=3, help="runs of each case in each mode")
     p.add_argument(
@@ -149,14 +205,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"Python {info['python']}; load {load_average()}; calibration {calibrate():.1f} ms"
     )
     print(f"{args.robots} robots, time scale {args.time_scale:g}, {args.rounds} rounds")
-    runs = anyio.run(measure, args.case or CASES, args.robots, args.rounds, args.time_scale)
-    table = rows(runs)
+    cases = args.case or [*CASES, PREEMPTION]
+    results = anyio.run(measure, cases, args.robots, args.rounds, args.time_scale)
+    runs, preempted = results.runs, results.preemption
+    table = rows(runs, preempted)
     print(format_table(table))
-    print(details(runs))
+    if runs:
+        print(details(runs))
     print(f"load after: {load_average()}")
-    problems = verdict(runs)
+    problems = verdict(runs, preempted)
     for problem in problems:
         print(f"PROBLEM: {problem}")
     if args.json:
-        args.json.write_bytes(msgspec.json.encode({"machine": info, "runs": runs, "rows": table}))
+        args.json.write_bytes(
+            msgspec.json.encode({"machine": info, "results": results, "rows": table})
+        )
     return 1 if problems else 0

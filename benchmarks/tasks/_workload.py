@@ -9,7 +9,11 @@ Cases (every goal puts one gear into one robot's kit box, which only that robot 
 - ``shared-boxes``: one goal per robot, the gears in the fleet's two part boxes (one per
   station): every task claims the box it picks from, so tasks picking from one box wait for
   each other;
-- ``overlapping``: two goals for robot r1's kit box: both claim r1, the second waits.
+- ``overlapping``: two goals for robot r1's kit box: both claim r1, the second waits;
+- the preemption case (:func:`run_preemption`): a four-gear goal for r1's kit box runs; once
+  its first step ended, a priority-5 goal for one more gear into that kit box is submitted.
+  With preemption the long task gives way at a step boundary; the baseline submits the long
+  task not preemptible, so the urgent one waits for its end.
 
 Per run: each task's outcome, what it was seen waiting for (the service's ``TaskInfo.waiting``,
 sampled), its planning time, the makespan (first submission to the last ``TaskFinished``) and
@@ -25,12 +29,20 @@ from collections.abc import Sequence
 import anyio
 import msgspec
 
-from task_agent.protocol import Planned, StepFinished, StepStarted, SubmitGoal, TaskFinished
+from task_agent.protocol import (
+    Planned,
+    StepFinished,
+    StepStarted,
+    SubmitGoal,
+    TaskFinished,
+    TaskOptions,
+    TaskPaused,
+)
 from task_agent.service import TaskService
 from tests.assets.task_fleet import Fleet, fleet
 from wm_store.protocol import AddElement, Relation
 
-__all__ = ["CASES", "MODES", "Run", "run_case"]
+__all__ = ["CASES", "MODES", "Preempted", "Run", "run_case", "run_preemption"]
 
 CASES = ("independent", "shared-boxes", "overlapping")
 MODES = ("sequential", "concurrent")
@@ -165,5 +177,59 @@ async def run_case(case: str, mode: str, robots: int, time_scale: float) -> Run:
         waited=waited,
         replans=sum(e.replans for e in ends.values()),
         finish_order=[e.task_id for e in sorted(ends.values(), key=lambda e: e.stamp)],
+        interleaved=_interleaved(f),
+    )
+
+
+class Preempted(msgspec.Struct, kw_only=True):
+    """One run of the preemption case: a long low-priority task on r1, then a high-priority
+    goal for r1's kit, submitted once the low task's first step ended."""
+
+    preemption: bool
+    """The low task was submitted preemptible (else: the baseline, the high task waits)."""
+    outcomes: dict[str, str]
+    high_turnaround: float
+    """The high task's submission to its end, seconds."""
+    low_makespan: float
+    """The low task's submission to its end, seconds."""
+    makespan: float
+    """The low task's submission to the last end, seconds."""
+    high_first: bool
+    gave_way: bool
+    """The low task paused to give way (``TaskPaused``)."""
+    interleaved: list[str] = []
+
+    @property
+    def succeeded(self) -> bool:
+        return all(o == "succeeded" for o in self.outcomes.values())
+
+
+async def run_preemption(preemption: bool, robots: int, time_scale: float) -> Preempted:
+    """The preemption case once (see :class:`Preempted`), on a fresh fleet."""
+    async with fleet(robots=robots, parts=8, time_scale=time_scale) as f:
+        low = " and ".join(f"contain({f.kits[0]}, {f.parts[p]})" for p in (0, 2, 4, 6))
+        high = f"contain({f.kits[0]}, {f.parts[1]})"
+        tasks = f.service()
+        async with anyio.create_task_group() as tg:
+            await tg.start(tasks.run)
+            began = time.time()
+            low_options = TaskOptions(preemptible=preemption)
+            await tasks.handle(SubmitGoal(goal=low, task_id="low", options=low_options))
+            while not any(e.task_id == "low" for e in f.of(StepFinished)):
+                await f.changed.wait()
+            asked = time.time()
+            high_options = TaskOptions(priority=5)
+            await tasks.handle(SubmitGoal(goal=high, task_id="high", options=high_options))
+            await _finished(f, ["low", "high"])
+            tg.cancel_scope.cancel()
+    ends = {e.task_id: e for e in f.of(TaskFinished) if isinstance(e, TaskFinished)}
+    return Preempted(
+        preemption=preemption,
+        outcomes={t: ends[t].outcome for t in ("low", "high")},
+        high_turnaround=ends["high"].stamp - asked,
+        low_makespan=ends["low"].stamp - began,
+        makespan=max(e.stamp for e in ends.values()) - began,
+        high_first=ends["high"].stamp < ends["low"].stamp,
+        gave_way=any(e.task_id == "low" for e in f.of(TaskPaused)),
         interleaved=_interleaved(f),
     )

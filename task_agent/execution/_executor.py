@@ -347,7 +347,7 @@ class Executor:
         of = f" (priority {priority})" if priority is not None else ""
         reason = f"preempted by task {by}{of} at a step boundary"
         self.events.emit(TaskPaused, reason=reason, runs=[])
-        things = ", ".join(sorted(held.agents | held.objects))
+        things = ", ".join(sorted(held.agents or held.objects))
         self.waiting = f"{things} (preempted by task {by}{of})"
         _log.info("task %s: %s; waits for %s", self.task_id, reason, things)
         try:
