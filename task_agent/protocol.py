@@ -437,7 +437,9 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
 
 class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     """The task is held (``PauseTask``): no new step starts; ``runs`` were paused on their
-    agents (``agent/run``)."""
+    agents (``agent/run``). Also when a task of higher priority preempted the task at a step
+    boundary (``reason`` says which; no run is paused: none was running); ``TaskResumed``
+    follows once the task holds its claim again."""
 
     task_id: str
     seq: int

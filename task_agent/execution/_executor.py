@@ -98,11 +98,11 @@ from ..protocol import (
     TaskResumed,
     TaskStarted,
 )
-from ._claiming import claim_of, free_agents
+from ._claiming import TaskClaims, free_agents
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
-from ._safe_state import SafeStatePhase, held_by
+from ._safe_state import SafeStatePhase
 from ._state import (
     StepSpec,
     WorldModel,
@@ -170,8 +170,6 @@ class Executor:
         self.claims = claims
         """The task service's claims: this task holds its agents and objects while it runs
         and waits for those another task holds (None: no other task shares the site)."""
-        self.waiting = ""
-        """What the task waits for before its steps can start ("" when it waits for none)."""
         self.learning = TaskLearning(durations or DurationBook(), wm)
         """The learning hook: run times into ``durations``, failed steps, makespans."""
         self.verify = verify
@@ -180,9 +178,6 @@ class Executor:
         self.wm = wm
         self.discovery = discovery
         self.options = options or TaskOptions()
-        self.preemptible = claims is not None and preemption and self.options.preemptible
-        """A task of higher priority may take this task's claim at a step boundary (a goal's
-        task: one that can plan again; see the module doc)."""
         self.planner = planner
         self.wm_timeout = wm_timeout
         self.agent_wait = agent_wait
@@ -210,6 +205,17 @@ class Executor:
         self.finished_at = 0.0
         self.partial: PartialResult | None = None
         """What a task that lost an agent achieved and lost (``partial``), once it ended."""
+        self.claiming = TaskClaims(
+            book=claims,
+            steps=self.steps,
+            events=self.events,
+            discovery=discovery,
+            wm=wm,
+            priority=self.options.priority,
+            preemptible=preemption and self.options.preemptible,
+            catch_up=self._catch_up,
+        )
+        """This task's side of ``claims``: claiming, waiting, giving way."""
         self.safe_state = SafeStatePhase(
             wm=wm,
             discovery=discovery,
@@ -233,6 +239,11 @@ class Executor:
         if self.outcome == "running" and not self._abort_reason:
             self._abort_reason = reason or "aborted on request"
             self._scope.cancel()
+
+    @property
+    def waiting(self) -> str:
+        """What the task waits for before its steps can start ("" when it waits for none)."""
+        return self.claiming.waiting
 
     @property
     def paused(self) -> bool:
@@ -274,93 +285,10 @@ class Executor:
             paused=self.paused and self.outcome == "running",
             partial=self.partial,
             priority=self.options.priority,
-            claims=sorted(self._held()),
+            claims=sorted(self.claiming.held()),
             waiting=self.waiting if self.outcome == "running" else "",
             **self.learning.makespan_fields(ended=self.outcome != "running"),
         )
-
-    def _held(self) -> set[str]:
-        claim = self.claims.claim_of(self.task_id) if self.claims is not None else None
-        return set() if claim is None else set(claim.agents) | set(claim.objects)
-
-    async def _claim(self, steps: list[StepSpec], *, preemptible: bool = False) -> bool:
-        """Hold what ``steps`` need before they run, waiting (``waiting`` says for what) while
-        other tasks hold any of it (:mod:`task_agent.claims`). True if it had to wait."""
-        if self.claims is None:
-            return False
-        agents, objects = claim_of(steps, self.discovery.agents(include_unavailable=True), self.wm)
-        held_agents, held_objects = self.claims.busy(self.task_id)
-        blocked = sorted((agents & held_agents) | (objects & held_objects))
-        if blocked:
-            self.waiting = f"{', '.join(blocked)} (held by another task)"
-            _log.info("task %s waits for %s", self.task_id, self.waiting)
-        try:
-            claim = await self.claims.acquire(
-                self.task_id,
-                agents,
-                objects,
-                priority=self.options.priority,
-                preemptible=preemptible,
-            )
-        finally:
-            self.waiting = ""
-        return claim.waited
-
-    async def _run_steps(self, steps: list[StepSpec]) -> StepOutcome | None:
-        """:meth:`StepScheduler.run`, giving way at a step boundary when a task of higher
-        priority asks for the claim (a preemptible task)."""
-        if not self.preemptible:
-            return await self.steps.run(steps)
-        async with anyio.create_task_group() as tg:
-            tg.start_soon(self._watch_preemption)
-            failure = await self.steps.run(steps)
-            tg.cancel_scope.cancel()
-        return failure
-
-    async def _watch_preemption(self) -> None:
-        assert self.claims is not None
-        by = await self.claims.preempted(self.task_id)
-        _log.info("task %s gives way to task %s at its next step boundary", self.task_id, by)
-        self.steps.give_way(self._boundary)
-
-    async def _boundary(self, ready: list[StepSpec], running: bool) -> list[StepSpec]:
-        """While giving way: the ready steps of robots that hold something (they finish what
-        they carry); when no step runs and none of those is ready while a robot of the task
-        still holds something, every ready step (none is left holding a part)."""
-        await self._catch_up()
-        agents = self.discovery.agents(include_unavailable=True)
-        holding = {a.name for a in agents if a.name in self.steps.used and held_by(a, self.wm)}
-        finishing = [s for s in ready if s.agent in holding]
-        if finishing or running or not holding:
-            return finishing
-        return ready
-
-    async def _give_way(self) -> None:
-        """Preempted at a step boundary: give the claim back, wait until the task that asked
-        for it (and any other of higher priority) is done with it, hold it again."""
-        assert self.claims is not None
-        held = self.claims.claim_of(self.task_id)
-        by = self.claims.asked_by(self.task_id)
-        if held is None:
-            return
-        priority = next((c.priority for c in self.claims.waiting() if c.task_id == by), None)
-        of = f" (priority {priority})" if priority is not None else ""
-        reason = f"preempted by task {by}{of} at a step boundary"
-        self.events.emit(TaskPaused, reason=reason, runs=[])
-        things = ", ".join(sorted(held.agents or held.objects))
-        self.waiting = f"{things} (preempted by task {by}{of})"
-        _log.info("task %s: %s; waits for %s", self.task_id, reason, things)
-        try:
-            await self.claims.acquire(
-                self.task_id,
-                held.agents,
-                held.objects,
-                priority=self.options.priority,
-                preemptible=True,
-            )
-        finally:
-            self.waiting = ""
-        self.events.emit(TaskResumed, runs=[])
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
         """Plan and run until ``goal`` holds (or fails, is unsolvable or aborted)."""
@@ -382,8 +310,7 @@ class Executor:
             with self._scope:
                 outcome, message = await body()
         except anyio.get_cancelled_exc_class():
-            if self.claims is not None:
-                self.claims.release(self.task_id)
+            self.claiming.release()
             self._finish("aborted", "the task agent stopped")
             raise
         except Exception as e:  # a bug must not leave the task "running" forever
@@ -393,8 +320,7 @@ class Executor:
             outcome, message = "aborted", self._abort_reason
         if outcome in ("partial", "failed", "aborted"):
             await self._safe_state()
-        if self.claims is not None:
-            self.claims.release(self.task_id)
+        self.claiming.release()
         with anyio.CancelScope(shield=True), anyio.move_on_after(self.wm_timeout):
             await self.learning.save()
         return self._finish(outcome, message)
@@ -442,7 +368,7 @@ class Executor:
         while True:
             try:
                 steps = await self._plan(target, attempt, excluded)
-                while await self._claim(steps, preemptible=self.preemptible):
+                while await self.claiming.claim(steps, preemptible=True):
                     steps = await self._plan(target, attempt, excluded)  # changed meanwhile
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
@@ -459,9 +385,9 @@ class Executor:
                 continue
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
-            failure = await self._run_steps(steps)
+            failure = await self.claiming.run(steps)
             if self.steps.gave_way:
-                await self._give_way()
+                await self.claiming.give_way()
                 continue
             if failure is None:
                 await self._catch_up()
@@ -570,10 +496,10 @@ class Executor:
         await self._await_agents()
         started = time.perf_counter()
         failed = self.learning.excluded()
-        busy = self.claims.busy(self.task_id)[0] if self.claims is not None else frozenset()
+        busy = self.claiming.busy_agents()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
-        try:  # around what other tasks hold first, else with it (and wait for it: _claim)
+        try:  # around what other tasks hold first, else with it (and wait for it: TaskClaims.claim)
             plan = await self.planner.plan(free if busy else agents, self.wm, goal, exclude=failed)
         except UnsolvableError:
             if busy:
@@ -679,7 +605,7 @@ class Executor:
             makespan=max((s.finish for s in steps), default=0.0),
             sequential=sum(s.finish - s.start for s in steps),
         )
-        await self._claim(steps)
+        await self.claiming.claim(steps)  # a task file cannot plan again: never preempted
         failure: StepOutcome | None = await self.steps.run(steps)
         if failure is not None:
             return "failed", str(failure)
