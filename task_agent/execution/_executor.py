@@ -499,15 +499,16 @@ class Executor:
         busy = self.claiming.busy_agents()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
+        around = free if busy and free else agents  # all busy: nothing to plan around with
         try:  # around what other tasks hold first, else with it (and wait for it: TaskClaims.claim)
-            plan = await self.planner.plan(free if busy else agents, self.wm, goal, exclude=failed)
-        except UnsolvableError:
-            if busy:
+            plan = await self.planner.plan(around, self.wm, goal, exclude=failed)
+        except (UnsolvableError, DomainError) as e:
+            if around is not agents:
                 _log.info(
                     "task %s: no plan without %s (busy); trying with them", self.task_id, busy
                 )
                 plan = await self.planner.plan(agents, self.wm, goal, exclude=failed)
-            elif excluded:
+            elif excluded and isinstance(e, UnsolvableError):
                 _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
                 plan = await self.planner.plan(self._agents(set()), self.wm, goal, exclude=failed)
             else:

@@ -172,3 +172,38 @@ async def test_a_long_low_priority_task_gives_way_at_a_step_boundary_and_both_su
     )
     for p in (0, 1, 2, 4, 6):
         assert f.wm.query_relation(f.kits[0], "contain", f.parts[p]), f"part {p} not in the kit"
+
+
+async def test_a_robot_asked_mid_pick_puts_the_part_down_before_it_gives_way() -> None:
+    """The high task arrives while the low task's pick runs: r1 will hold a gear at the next
+    step boundary, so the low task runs its place first and gives way only then."""
+    async with fleet(robots=1, parts=4, time_scale=0.05) as f:
+        tasks = f.service()
+        low_goal = f"contain({f.kits[0]}, {f.parts[0]}) and contain({f.kits[0]}, {f.parts[2]})"
+        high_goal = f"contain({f.kits[0]}, {f.parts[1]})"
+
+        def picking() -> bool:
+            return any(
+                isinstance(e, StepStarted) and e.skill == "pick"
+                for e in _of(f.events, "low", StepStarted)
+            )
+
+        async with anyio.create_task_group() as tg:
+            await tg.start(tasks.run)
+            await tasks.handle(SubmitGoal(goal=low_goal, task_id="low"))
+            await _until(f, picking)
+            await tasks.handle(
+                SubmitGoal(goal=high_goal, task_id="high", options=TaskOptions(priority=5))
+            )
+            await _until(f, lambda: len(f.of(TaskFinished)) == 2)
+            tg.cancel_scope.cancel()
+    ends = {e.task_id: e for e in f.of(TaskFinished) if isinstance(e, TaskFinished)}
+    assert ends["high"].outcome == ends["low"].outcome == "succeeded", ends
+    assert ends["high"].stamp < ends["low"].stamp
+    (paused,) = _of(f.events, "low", TaskPaused)
+    done = [
+        e.skill
+        for e in _of(f.events, "low", StepFinished)
+        if isinstance(e, StepFinished) and e.seq < paused.seq
+    ]
+    assert done[-2:] == ["pick", "place"], f"r1 gave way holding the gear: {done}"
