@@ -3,7 +3,8 @@ the preemptible holders that alone hold it up to give way; a preempted task keep
 and is not preempted again by a task of equal or lower priority than the one before) and a
 task service in which a long low-priority task gives way to a high-priority one on the same
 robot at a step boundary, with no part left in the gripper, and both succeed, the high one
-first."""
+first; asked while its pick runs (a one-robot site: the high task cannot plan around it), the
+low task runs the place that puts the part down before it gives way."""
 
 from __future__ import annotations
 
