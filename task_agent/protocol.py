@@ -169,6 +169,10 @@ class TaskOptions(Struct, frozen=True, kw_only=True):
     """``decomposed``: the goal's independent parts are allocated to agents and planned as
     small problems, falling back to the whole task when one has no plan; ``monolithic``: the
     whole task at once (:mod:`task_agent.planning`)."""
+    preemptible: bool = True
+    """A task of higher priority that waits for what this task holds may take it at this
+    task's next step boundary; this task then waits and plans again (goals only; see
+    :mod:`task_agent.claims`). With equal priorities (the default) nothing is preempted."""
 
 
 class SubmitGoal(Struct, tag=True, tag_field="request", frozen=True, kw_only=True):
@@ -439,7 +443,9 @@ class TaskFinished(Struct, tag=True, tag_field="event", frozen=True, kw_only=Tru
 
 class TaskPaused(Struct, tag=True, tag_field="event", frozen=True, kw_only=True):
     """The task is held (``PauseTask``): no new step starts; ``runs`` were paused on their
-    agents (``agent/run``)."""
+    agents (``agent/run``). Also when a task of higher priority preempted the task at a step
+    boundary (``reason`` says which; no run is paused: none was running); ``TaskResumed``
+    follows once the task holds its claim again."""
 
     task_id: str
     seq: int

@@ -182,8 +182,12 @@ class TaskService:
         verify: GoalVerifier | None = None,
         max_events: int = MAX_TASK_EVENTS,
         durations: DurationBook | None = None,
+        preemption: bool = True,
     ) -> None:
         self.wm = wm
+        self.preemption = preemption
+        """A task of higher priority may take a running task's claim at that task's next step
+        boundary (tasks submitted ``TaskOptions.preemptible``; :mod:`task_agent.claims`)."""
         self.durations = durations or DurationBook()
         """Learned run times, shared by every task (:mod:`task_agent.learning`)."""
         self.max_events = max_events
@@ -321,6 +325,7 @@ class TaskService:
             max_events=self.max_events,
             claims=self.claims,
             durations=self.durations,
+            preemption=self.preemption,
         )
 
     def _start(self, executor: Executor, body: Callable[[], Awaitable[TaskFinished]]) -> None:
@@ -394,6 +399,7 @@ async def serve_tasks(
     operator: str | None = "operator",
     grace: float = 15.0,
     durations: Path | str | None = None,
+    preemption: bool = True,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Serve the task agent on ``mesh`` until cancelled; with ``operator`` (a name), also the
@@ -401,7 +407,9 @@ async def serve_tasks(
     ``tasks/rpc`` is reachable. Cancelling aborts every running task (runs stopped).
     ``grace``: seconds agents whose tokens vanished together (a lost router, a partition)
     stay unknown, their runs followed on, before they are lost (:class:`Discovery`).
-    ``durations``: the file the learned run times are kept in (default: in memory)."""
+    ``durations``: the file the learned run times are kept in (default: in memory).
+    ``preemption``: a waiting task of higher priority may take what a running one holds at
+    its next step boundary (:class:`TaskService`)."""
     keys = mesh.keys
     discovery = Discovery(wm, grace=grace)
 
@@ -426,6 +434,7 @@ async def serve_tasks(
         writes=writes,
         verify=mesh_verifier(mesh, wm),
         durations=await anyio.to_thread.run_sync(DurationBook.load, durations),
+        preemption=preemption,
     )
 
     async with anyio.create_task_group() as tg:

@@ -113,6 +113,12 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="keep the learned run times of every (robot, skill) in this JSON file, across "
         "restarts (default: learned in memory only)",
     )
+    agent.add_argument(
+        "--no-preemption",
+        action="store_true",
+        help="a running task always keeps what it holds until it ends (default: a waiting "
+        "task of higher priority takes it at the running task's next step boundary)",
+    )
     agent.set_defaults(func=_serve)
 
     task = sub.add_parser("task", help="submit, follow, list and abort tasks")
@@ -191,7 +197,13 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         default=0,
         metavar="N",
         help="among tasks that wait for the same robots or objects, a higher N goes first "
-        "(default: 0); a running task keeps what it holds",
+        "(default: 0); a running task of lower priority gives way at its next step boundary "
+        "(unless it was submitted with --no-preempt), then plans again and finishes",
+    )
+    submit.add_argument(
+        "--no-preempt",
+        action="store_true",
+        help="this task keeps what it holds until it ends, whatever waits for it",
     )
     submit.add_argument(
         "--detach",
@@ -336,7 +348,12 @@ def _serve(args: argparse.Namespace) -> int:
             ):
                 operator = None if args.no_operator else args.operator
                 await serve_tasks(  # until cancelled
-                    mesh, wm, operator=operator, grace=args.grace, durations=args.durations
+                    mesh,
+                    wm,
+                    operator=operator,
+                    grace=args.grace,
+                    durations=args.durations,
+                    preemption=not args.no_preemption,
                 )
         except (WmError, MeshlinkError) as e:
             print(f"skimesh task-agent: {e}", file=sys.stderr)
@@ -390,6 +407,7 @@ def _options(args: argparse.Namespace) -> TaskOptions:
         operator_fallback="*" in fallback,
         operator_fallback_skills=fallback - {"", "*"},
         priority=args.priority,
+        preemptible=not args.no_preempt,
     )
 
 

@@ -6,7 +6,10 @@
   run of the task.
 - :class:`StepScheduler` runs a graph of steps on the agents: a step starts as soon as its
   predecessors succeeded, steps on different robots in parallel; agent loss, the failed branch
-  stopped, operator fallback (semi-autonomy).
+  stopped, operator fallback (semi-autonomy); ``give_way`` stops it at a step boundary.
+- A task's claims (``_claiming``): what its steps need of the site (robots, objects), held
+  in the service's :class:`~task_agent.claims.ClaimBook` before they run; a task preempted by
+  one of higher priority gives its claim back at a step boundary, waits and plans again.
 - :class:`SkillRunner` is how one skill runs on one agent: :class:`ZenohRunner` over the mesh,
   :class:`CoreRunner` on in-process agent cores (tests, benchmarks).
 - :class:`EventHistory` keeps a task's events for late watchers (bounded); the task-level
@@ -18,7 +21,8 @@
   :func:`steps_from_file`, :func:`resolve_params` (data flow) and :func:`unmet_goal`.
 
 The code: ``_state`` (the steps as data), ``_runners``, ``_run_writes``, ``_history``,
-``_hold`` (the pause), ``_steps`` (the scheduler), ``_safe_state`` and ``_executor``. The
+``_hold`` (the pause), ``_steps`` (the scheduler), ``_safe_state``, ``_claiming`` and
+``_executor``. The
 executor plans through :mod:`task_agent.planning`, so this sub-package imports unified-planning.
 """
 

@@ -39,6 +39,18 @@ step is kept with its cause and the state of its things, and later plans exclude
 state holds, so no step fails the same way twice in a task; with nothing else left the task
 ends saying which step failed on which robot and why.
 
+**Claims** (:mod:`task_agent.claims`, ``claims``): before its steps run, a task holds the
+agents and objects they need, waiting while another task holds any of them (``waiting`` says
+for what); a task that had to wait plans again from the world model as it is once its claim
+is granted (the other task changed it meanwhile). **Preemption** (``preemption`` and
+``TaskOptions.preemptible``, both on by default; goals only, not task files): when a task of
+higher priority waits for what this one holds, this task gives way at its next step boundary
+(:meth:`StepScheduler.give_way <task_agent.execution.StepScheduler.give_way>`: its steps in
+flight finish, then only steps that finish what one of its robots holds start, so no robot
+is left holding a part), gives its claim back and waits (``TaskPaused`` with the reason;
+``waiting`` says preempted by which task), re-acquires its claim (``TaskResumed``) and plans
+again from the world model as it is; neither the wait nor the new plan counts as a replan.
+
 Events, in ``seq`` order: ``TaskStarted``, ``Planned`` (per attempt), ``StepStarted`` /
 ``StepProgress`` / ``StepFinished``, ``Replanning``, ``SafeState`` (after an unfinished
 ending), one ``TaskFinished``.
@@ -86,7 +98,7 @@ from ..protocol import (
     TaskResumed,
     TaskStarted,
 )
-from ._claiming import claim_of, free_agents
+from ._claiming import TaskClaims, free_agents
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
@@ -153,13 +165,12 @@ class Executor:
         max_events: int = MAX_TASK_EVENTS,
         claims: ClaimBook | None = None,
         durations: DurationBook | None = None,
+        preemption: bool = True,
     ) -> None:
         self.task_id = task_id
         self.claims = claims
         """The task service's claims: this task holds its agents and objects while it runs
         and waits for those another task holds (None: no other task shares the site)."""
-        self.waiting = ""
-        """What the task waits for before its steps can start ("" when it waits for none)."""
         self.learning = TaskLearning(durations or DurationBook(), wm)
         """The learning hook: run times into ``durations``, failed steps, makespans."""
         self.verify = verify
@@ -197,6 +208,17 @@ class Executor:
         self.finished_at = 0.0
         self.partial: PartialResult | None = None
         """What a task that lost an agent achieved and lost (``partial``), once it ended."""
+        self.claiming = TaskClaims(
+            book=claims,
+            steps=self.steps,
+            events=self.events,
+            discovery=discovery,
+            wm=wm,
+            priority=self.options.priority,
+            preemptible=preemption and self.options.preemptible,
+            catch_up=self._catch_up,
+        )
+        """This task's side of ``claims``: claiming, waiting, giving way."""
         self.safe_state = SafeStatePhase(
             wm=wm,
             discovery=discovery,
@@ -220,6 +242,11 @@ class Executor:
         if self.outcome == "running" and not self._abort_reason:
             self._abort_reason = reason or "aborted on request"
             self._scope.cancel()
+
+    @property
+    def waiting(self) -> str:
+        """What the task waits for before its steps can start ("" when it waits for none)."""
+        return self.claiming.waiting
 
     @property
     def paused(self) -> bool:
@@ -261,30 +288,10 @@ class Executor:
             paused=self.paused and self.outcome == "running",
             partial=self.partial,
             priority=self.options.priority,
-            claims=sorted(self._held()),
+            claims=sorted(self.claiming.held()),
             waiting=self.waiting if self.outcome == "running" else "",
             **self.learning.makespan_fields(ended=self.outcome != "running"),
         )
-
-    def _held(self) -> set[str]:
-        claim = self.claims.claim_of(self.task_id) if self.claims is not None else None
-        return set() if claim is None else set(claim.agents) | set(claim.objects)
-
-    async def _claim(self, steps: list[StepSpec]) -> None:
-        """Hold what ``steps`` need before they run, waiting (``waiting`` says for what) while
-        other tasks hold any of it (:mod:`task_agent.claims`)."""
-        if self.claims is None:
-            return
-        agents, objects = claim_of(steps, self.discovery.agents(include_unavailable=True), self.wm)
-        held_agents, held_objects = self.claims.busy(self.task_id)
-        blocked = sorted((agents & held_agents) | (objects & held_objects))
-        if blocked:
-            self.waiting = f"{', '.join(blocked)} (held by another task)"
-            _log.info("task %s waits for %s", self.task_id, self.waiting)
-        try:
-            await self.claims.acquire(self.task_id, agents, objects, priority=self.options.priority)
-        finally:
-            self.waiting = ""
 
     async def run_goal(self, goal: Goal) -> TaskFinished:
         """Plan and run until ``goal`` holds (or fails, is unsolvable or aborted)."""
@@ -306,8 +313,7 @@ class Executor:
             with self._scope:
                 outcome, message = await body()
         except anyio.get_cancelled_exc_class():
-            if self.claims is not None:
-                self.claims.release(self.task_id)
+            self.claiming.release()
             self._finish("aborted", "the task agent stopped")
             raise
         except Exception as e:  # a bug must not leave the task "running" forever
@@ -317,8 +323,7 @@ class Executor:
             outcome, message = "aborted", self._abort_reason
         if outcome in ("partial", "failed", "aborted"):
             await self._safe_state()
-        if self.claims is not None:
-            self.claims.release(self.task_id)
+        self.claiming.release()
         with anyio.CancelScope(shield=True), anyio.move_on_after(self.wm_timeout):
             await self.learning.save()
         return self._finish(outcome, message)
@@ -366,6 +371,8 @@ class Executor:
         while True:
             try:
                 steps = await self._plan(target, attempt, excluded)
+                while await self.claiming.claim(steps, preemptible=True):
+                    steps = await self._plan(target, attempt, excluded)  # changed meanwhile
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
                     return "unsolvable", str(e)
@@ -381,8 +388,10 @@ class Executor:
                 continue
             except PlanningError as e:
                 return "failed", f"planning failed: {e}"
-            await self._claim(steps)
-            failure = await self.steps.run(steps)
+            failure = await self.claiming.run(steps)
+            if self.steps.gave_way:
+                await self.claiming.give_way()
+                continue
             if failure is None:
                 await self._catch_up()
                 unmet = unmet_goal(target, self.wm)
@@ -490,19 +499,20 @@ class Executor:
         await self._await_agents()
         started = time.perf_counter()
         failed = self.learning.excluded()
-        busy = self.claims.busy(self.task_id)[0] if self.claims is not None else frozenset()
+        busy = self.claiming.busy_agents()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
         plan_ = functools.partial(self.planner.plan, exclude=failed, progress=self._planning)
-        try:  # around what other tasks hold first, else with it (and wait for it: _claim)
-            plan = await plan_(free if busy else agents, self.wm, goal)
-        except UnsolvableError:
-            if busy:
+        around = free if busy and free else agents  # all busy: nothing to plan around with
+        try:  # around what other tasks hold first, else with it (and wait for it: TaskClaims.claim)
+            plan = await plan_(around, self.wm, goal)
+        except (UnsolvableError, DomainError) as e:
+            if around is not agents:
                 _log.info(
                     "task %s: no plan without %s (busy); trying with them", self.task_id, busy
                 )
                 plan = await plan_(agents, self.wm, goal)
-            elif excluded:
+            elif excluded and isinstance(e, UnsolvableError):
                 _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
                 plan = await plan_(self._agents(set()), self.wm, goal)
             else:
@@ -607,7 +617,7 @@ class Executor:
             makespan=max((s.finish for s in steps), default=0.0),
             sequential=sum(s.finish - s.start for s in steps),
         )
-        await self._claim(steps)
+        await self.claiming.claim(steps)  # a task file cannot plan again: never preempted
         failure: StepOutcome | None = await self.steps.run(steps)
         if failure is not None:
             return "failed", str(failure)

@@ -26,6 +26,11 @@ skill, ``operator_fallback_skills`` for the skills named), is handed to the oper
 same skill with the parameters it ran with, plus ``operator_note`` saying what failed; a person
 answers it (:mod:`task_agent.operator`) and a success counts as the step's success.
 
+Giving way (:meth:`StepScheduler.give_way`, a preempted task): from then on only the ready
+steps a policy picks start (the executor's: those finishing what a robot holds); once no step
+of the task runs and the policy picks none, :meth:`StepScheduler.run` returns with
+:attr:`StepScheduler.gave_way` set: a step boundary, nothing stopped mid-motion.
+
 Pause (:attr:`StepScheduler.hold`, a :class:`~task_agent.execution._hold.Hold`): while the task
 is held no step starts and the task's started runs are paused on their agents; releasing it
 resumes them and starts the steps that became ready meanwhile.
@@ -36,7 +41,7 @@ from __future__ import annotations
 import math
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from contextlib import nullcontext
 from typing import Any, TypeVar, cast
 
@@ -71,9 +76,13 @@ from ._state import (
     resolve_params,
 )
 
-__all__ = ["EventSink", "StepOutcome", "StepScheduler"]
+__all__ = ["Boundary", "EventSink", "StepOutcome", "StepScheduler"]
 
 E = TypeVar("E", bound=msgspec.Struct)
+
+Boundary = Callable[[list[StepSpec], bool], Awaitable[list[StepSpec]]]
+"""While a task gives way: ``(ready steps, whether a step runs)`` -> the ready steps that may
+still start."""
 
 
 class EventSink:
@@ -161,6 +170,17 @@ class StepScheduler:
         self._running: dict[int, _Running] = {}
         self._wake: MemoryObjectSendStream[StepOutcome | None] | None = None
         self._tg: TaskGroup | None = None
+        self._boundary: Boundary | None = None
+        self.gave_way = False
+        """The last :meth:`run` returned at a step boundary to give way (its graph not done)."""
+
+    def give_way(self, boundary: Boundary) -> None:
+        """Make :meth:`run` return at the next step boundary: from now on start only the
+        ready steps ``boundary`` picks; once no step runs and it picks none, return (with
+        :attr:`gave_way` set). Lasts until :meth:`run` returns."""
+        self._boundary = boundary
+        if self._wake is not None:
+            self._wake.send_nowait(None)
 
     async def pause(self, reason: str = "") -> list[str] | None:
         """Hold the task (no step starts) and pause its started runs; returns them
@@ -184,6 +204,7 @@ class StepScheduler:
         graph = StepGraph(steps)
         self._planned_agents = {s.agent for s in steps if s.agent}
         failure: StepOutcome | None = None
+        self.gave_way = False
         send, receive = anyio.create_memory_object_stream[StepOutcome | None](math.inf)
         unsubscribe = self.discovery.on_presence(self._presence)
         try:
@@ -191,10 +212,16 @@ class StepScheduler:
                 async with anyio.create_task_group() as tg:
                     self._wake, self._tg = send, tg
                     while True:
-                        for spec in graph.ready() if self._may_start(failure) else ():
+                        ready = graph.ready() if self._may_start(failure) else []
+                        if self._boundary is not None and ready:
+                            ready = await self._boundary(ready, bool(graph.running))
+                        for spec in ready:
                             graph.start(spec.index)
                             tg.start_soon(self._step, spec, send, name=f"task step {spec}")
                         if not graph.running:
+                            if self._boundary is not None and failure is None:
+                                self.gave_way = not graph.complete
+                                break
                             if failure is None and self.hold.held and graph.ready():
                                 await self.hold.wait()
                                 continue
@@ -209,6 +236,7 @@ class StepScheduler:
                             self._stop(outcome.agent, "stopped", why, True)
         finally:
             self._wake = self._tg = None
+            self._boundary = None
             unsubscribe()
         return failure
 
