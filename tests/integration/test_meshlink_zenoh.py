@@ -369,18 +369,18 @@ async def test_liveliness_history_appear_and_disappear(
 
 async def test_alive_lists_the_tokens_alive_now(client: Mesh, server: Mesh) -> None:
     keys = client.keys
-    assert await client.alive(keys.agents(), timeout=1.0) == []
+    assert await client.alive(keys.agents(), timeout=5.0) == []
     async with client.watch_liveliness(keys.agents()) as events:
         with anyio.fail_after(5):
             with server.declare_token(keys.agent("a1")), server.declare_token(keys.agent("a2")):
                 seen = {(await events.receive()).key, (await events.receive()).key}
                 assert seen == {keys.agent("a1"), keys.agent("a2")}
-                everyone = await client.alive(keys.agents(), timeout=1.0)
+                everyone = await client.alive(keys.agents(), timeout=5.0)
                 assert everyone == [keys.agent("a1"), keys.agent("a2")]
-                assert await client.alive(keys.agent("a2"), timeout=1.0) == [keys.agent("a2")]
+                assert await client.alive(keys.agent("a2"), timeout=5.0) == [keys.agent("a2")]
             gone = {(await events.receive()), (await events.receive())}
             assert gone == {Liveness(keys.agent("a1"), False), Liveness(keys.agent("a2"), False)}
-    assert await client.alive(keys.agents(), timeout=1.0) == []
+    assert await client.alive(keys.agents(), timeout=5.0) == []
 
 
 async def test_a_token_whose_object_is_dropped_stays_alive(client: Mesh, server: Mesh) -> None:
