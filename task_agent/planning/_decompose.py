@@ -23,25 +23,27 @@ refused and the problem widened. The kept plans, in part order, form one sequent
 that is valid on the full task by construction; the partial order
 (:func:`~task_agent.planning.to_partial_order`) then runs the parts' steps in parallel
 wherever no fact, robot or device orders them (shared spots, shared objects and a robot's
-own parts stay ordered). When a part has no plan at any level, or the time given runs out,
-:func:`solve_in_parts` returns None and the planner solves the whole task (the monolithic
-path, which alone may report a goal unsolvable). Pure but for the engine calls.
+own parts stay ordered). When a part has no plan at any level, :func:`solve_in_parts` says so
+(:class:`Stuck`) and the planner solves the whole task in the time left (the monolithic
+path, which alone may report a goal unsolvable); when the time given runs out it says how
+many parts were planned. Pure but for the engine calls.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Literal
 
 import msgspec
 
 from ..domain import Lit, PlanningTask
-from ..reachability import GroundStep, State, apply, relevant_objects
+from ..reachability import GroundStep, State, apply, fact_text, relevant_objects
 from ._allocate import Allocation, Point, allocate, hardware
 from ._parts import FactGraph, parts
 from ._plan import PlanStep
 
-__all__ = ["LEVELS", "TRIES", "Decomposition", "Progress", "solve_in_parts"]
+__all__ = ["LEVELS", "TRIES", "Decomposition", "Progress", "Stuck", "solve_in_parts"]
 
 LEVELS = ((3, 6), (5, 24))
 """(hops, hub) of the focus of the first two levels (see the module doc)."""
@@ -54,6 +56,21 @@ Attempt = Callable[[PlanningTask, float], "tuple[bool, list[PlanStep]]"]
 
 Progress = Callable[[int, int], None]
 """Told (parts planned, parts) as a decomposed solve goes."""
+
+
+class Stuck(msgspec.Struct, kw_only=True):
+    """Why a decomposed solve gave up: ``time`` ran out, or ``part`` had no plan at any
+    level; ``done`` of ``parts`` were planned by then."""
+
+    reason: Literal["time", "part"]
+    part: str
+    done: int
+    parts: int
+
+    def __str__(self) -> str:
+        if self.reason == "time":
+            return f"planning by parts planned {self.done} of {self.parts} goal parts in time"
+        return f"planning by parts found no plan for {self.part} with any team of agents"
 
 
 class Decomposition(msgspec.Struct, kw_only=True):
@@ -198,9 +215,9 @@ def solve_in_parts(
     seconds: float,
     where: Mapping[str, Point] | None = None,
     progress: Progress | None = None,
-) -> Decomposition | None:
-    """A plan for ``task`` made part by part (see the module doc), or None when a part has
-    no plan at any level or ``seconds`` run out: the caller then solves the whole task.
+) -> Decomposition | Stuck:
+    """A plan for ``task`` made part by part (see the module doc), or why not: a part has no
+    plan at any level (the caller then solves the whole task) or ``seconds`` ran out.
     ``progress(done, parts)`` is called after each part is planned."""
     goal_parts = parts(task.goal)
     state = State(task.init)
@@ -219,10 +236,12 @@ def solve_in_parts(
                 continue
             found = run.plan_part(state, graph, index, pending)
             if found is None:
-                return None
-            part_steps, level, done = found
+                text = " and ".join(fact_text(lit.pred, lit.args) for lit in part)
+                planned = len(goal_parts) - len(pending)
+                return Stuck(reason="part", part=text, done=planned, parts=len(goal_parts))
+            part_steps, level, achieved = found
             widened += level > 0
-            pending -= done
+            pending -= achieved
             if progress is not None:
                 progress(len(goal_parts) - len(pending), len(goal_parts))
             for step in part_steps:
@@ -230,7 +249,8 @@ def solve_in_parts(
                 graph.add(effects.adds)
                 steps.append(msgspec.structs.replace(step, index=len(steps)))
     except TimeoutError:
-        return None
+        planned = len(goal_parts) - len(pending)
+        return Stuck(reason="time", part="", done=planned, parts=len(goal_parts))
     return Decomposition(
         steps=steps, parts=len(goal_parts), solves=run.solves, widened=widened, objects=run.largest
     )

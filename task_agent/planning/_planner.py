@@ -6,8 +6,9 @@ the world-model replica, which only the loop may touch) and solves in a worker t
 ``anyio.to_thread.run_sync`` with the planner's capacity limiter (one solve at a time by
 default).
 
-By default the task is first planned by parts (:mod:`._decompose`, within half the
-time-out); the rest of this paragraph is the whole-task path it falls back on. Before
+A large task, or one whose goal has parts for several agents, is first planned by parts
+(:mod:`._decompose`); when a part has no plan at any width the whole task is solved in the
+time left, by the path the rest of this paragraph describes. Before
 solving, the task is compressed to the objects the goal can touch
 (:func:`~task_agent.reachability.relevant_objects`), unless the goal itself names most objects
 (:data:`COMPRESS_BELOW`); the plan is replayed on the full task and, if that fails or the small
@@ -54,10 +55,11 @@ from ..learning import positions
 from ..reachability import diagnose, relevant_objects, replay
 from ._allocate import Point, hardware
 from ._convert import plan_steps, to_unified_planning
-from ._decompose import Progress, solve_in_parts
+from ._decompose import Progress, Stuck, solve_in_parts
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
 from ._exclusions import exclude_steps
 from ._nearby import nearby_agents
+from ._parts import parts
 from ._plan import Engine, Plan, PlanStats, PlanStep
 
 __all__ = ["COMPRESS_BELOW", "DECOMPOSE_FROM", "ENVIRONMENT_SOLVES", "PROGRESS_EVERY", "Planner"]
@@ -180,12 +182,27 @@ class Planner:
         Thread-safe: concurrent calls on one planner run one after the other."""
         with self._lock:
             start = time.perf_counter()
-            if self.decompose and len(task.objects) >= self.decompose_from:
+            stuck: Stuck | None = None
+            if self.decompose and self._by_parts(task):
                 told = _Logged(start, progress)
-                plan = self._solve_in_parts(task, start, where, told)
-                if plan is not None:
-                    return plan
-            return self._solve(task, start)
+                found = self._solve_in_parts(task, start, where, told)
+                if isinstance(found, Plan):
+                    return found
+                stuck = found
+                if found.reason == "time":
+                    raise PlannerTimeoutError(
+                        f"{found} ({self.timeout} s for {len(task.objects)} objects, "
+                        f"{len(task.actions)} actions); give it more time",
+                        timeout=self.timeout,
+                    )
+            return self._solve(task, start, stuck)
+
+    def _by_parts(self, task: PlanningTask) -> bool:
+        """Plan ``task`` by parts: it is large, or its goal has parts for several agents."""
+        if len(task.objects) >= self.decompose_from:
+            return True
+        agents = {s.agent for s in task.actions.values()}
+        return len(agents) > 1 and len(parts(task.goal)) > 1
 
     def _solve_in_parts(
         self,
@@ -193,18 +210,19 @@ class Planner:
         start: float,
         where: Mapping[str, Point] | None,
         progress: Progress,
-    ) -> Plan | None:
-        """The decomposed path (:mod:`._decompose`), within half the time-out."""
+    ) -> Plan | Stuck:
+        """The decomposed path (:mod:`._decompose`), within the time-out."""
 
         def attempt(sub: PlanningTask, seconds: float) -> tuple[bool, list[PlanStep]]:
             result = self._attempt(sub, seconds)
             return result.status in SOLVED, result.steps
 
-        found = solve_in_parts(
-            task, attempt, seconds=self.timeout / 2, where=where, progress=progress
-        )
-        if found is None or replay(task, [s.ground for s in found.steps])[1]:
-            return None
+        found = solve_in_parts(task, attempt, seconds=self.timeout, where=where, progress=progress)
+        if isinstance(found, Stuck):
+            return found
+        problem = replay(task, [s.ground for s in found.steps])[1]
+        if problem:  # cannot happen: each part was replayed on the full task
+            raise PlanningError(f"the plan made by parts does not replay ({problem}): a bug")
         stats = PlanStats(
             engine=self.engine,
             objects=len(task.objects),
@@ -216,7 +234,7 @@ class Planner:
         )
         return Plan(steps=tuple(found.steps), task=task, stats=stats)
 
-    def _solve(self, task: PlanningTask, start: float) -> Plan:
+    def _solve(self, task: PlanningTask, start: float, stuck: Stuck | None = None) -> Plan:
         deadline = start + self.timeout
         solved = task
         named = {a for lit in task.goal for a in lit.args}
@@ -224,7 +242,7 @@ class Planner:
             keep = relevant_objects(task)
             if len(keep) < len(task.objects):
                 solved = task.restrict(keep)
-        attempt = self._attempt(solved, deadline - time.perf_counter())
+        attempt = self._attempt(solved, max(deadline - time.perf_counter(), 0.001))
         fallback = False
         problem = "not solved"
         if attempt.status in SOLVED:
@@ -234,7 +252,7 @@ class Planner:
             attempt = self._attempt(task, deadline - time.perf_counter())
             if attempt.status in SOLVED:
                 _, problem = replay(task, [s.ground for s in attempt.steps])
-        self._raise_for(attempt, task)
+        self._raise_for(attempt, task, stuck)
         if problem:
             raise PlanningError(
                 f"the {self.engine} plan does not replay on the task ({problem}); this is a "
@@ -252,13 +270,15 @@ class Planner:
         )
         return Plan(steps=tuple(attempt.steps), task=task, stats=stats)
 
-    def _raise_for(self, attempt: _Attempt, task: PlanningTask) -> None:
+    def _raise_for(self, attempt: _Attempt, task: PlanningTask, stuck: Stuck | None) -> None:
         if attempt.status in SOLVED:
             return
         if attempt.status == Status.TIMEOUT:
+            before = f"{stuck}; then " if stuck is not None else ""
             raise PlannerTimeoutError(
-                f"{self.engine} found no plan within {self.timeout} s ({len(task.objects)} "
-                f"objects, {len(task.actions)} actions); give it more time or split the goal",
+                f"{before}{self.engine} found no plan for the whole task within "
+                f"{self.timeout} s ({len(task.objects)} objects, {len(task.actions)} actions); "
+                "give it more time",
                 timeout=self.timeout,
             )
         if attempt.status in UNSOLVABLE:

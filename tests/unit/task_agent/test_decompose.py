@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import pytest
 
-from task_agent import UnsolvableError, parse_goal
+from task_agent import PlannerTimeoutError, UnsolvableError, parse_goal
 from task_agent.discovery import agents_from_view
 from task_agent.domain import Lit, PlanningTask, build_task
 from task_agent.learning import positions
-from task_agent.planning import Plan, Planner, to_partial_order
+from task_agent.planning import DECOMPOSE_FROM, Plan, Planner, to_partial_order
 from task_agent.planning import _planner as planner_module
 from task_agent.planning._allocate import _assign, allocate
 from task_agent.planning._nearby import nearby_agents
@@ -164,3 +164,26 @@ def test_agents_left_out_are_taken_in_when_the_near_ones_have_no_plan(
     monkeypatch.setattr(planner_module, "nearby_agents", lambda a, v, g: [agents[0]])
     plan = SPLIT.plan_sync(agents, fleet.view, goal)
     assert valid(plan) and {s.agent for s in plan.steps} == {"r4"}
+
+
+def test_running_out_of_time_says_how_many_parts_were_planned() -> None:
+    fleet = fleet_scene(40)
+    task = task_of(
+        fleet,
+        " and ".join(f"contain({k}, {g[0]})" for k, g in zip(fleet.kits, fleet.gears, strict=True)),
+    )
+    with pytest.raises(PlannerTimeoutError, match=r"planned \d+ of 40 goal parts"):
+        Planner(timeout=0.05).solve(task)
+
+
+def test_a_small_goal_with_parts_for_two_robots_is_allocated_before_planning() -> None:
+    # two trays' worth of goal on a small site: planned by parts (one per robot), not whole
+    fleet = fleet_scene(2, start="cells")
+    two = [f"contain({fleet.kits[i]}, {fleet.gears[i][0]})" for i in (0, 1)]
+    task = task_of(fleet, " and ".join(two))
+    assert len(task.objects) < DECOMPOSE_FROM
+    plan = Planner().solve(task)
+    assert plan.stats.parts == 2 and {s.agent for s in plan.steps} == {"r1", "r2"}
+    # one part, or one agent: the whole task
+    one = task_of(fleet, f"contain({fleet.kits[0]}, {fleet.gears[0][0]})")
+    assert Planner().solve(one).stats.parts == 0

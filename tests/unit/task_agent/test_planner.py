@@ -143,9 +143,13 @@ def test_goal_nothing_can_achieve() -> None:
 @pytest.mark.parametrize("engine", ENGINES)
 def test_timeout(engine: Engine) -> None:
     _, task = kitting_task(5, 40, per_robot=8)
-    with pytest.raises(PlannerTimeoutError, match=f"{engine} found no plan within 0.001 s") as info:
-        Planner(engine=engine, timeout=0.001).solve(task)
+    whole = f"{engine} found no plan for the whole task within 0.001 s"
+    with pytest.raises(PlannerTimeoutError, match=whole) as info:
+        Planner(engine=engine, timeout=0.001, decompose=False).solve(task)
     assert info.value.timeout == 0.001
+    by_parts = r"planning by parts planned 0 of 5 goal parts in time \(0.001 s for"
+    with pytest.raises(PlannerTimeoutError, match=by_parts):
+        Planner(engine=engine, timeout=0.001).solve(task)
 
 
 def test_concurrent_fast_downward_solves_do_not_mix(
