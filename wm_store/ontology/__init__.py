@@ -45,19 +45,19 @@ from ._vocab import Rel as Rel
 from ._vocab import Tpl as Tpl
 
 if TYPE_CHECKING:
+    from ._literals import NAMESPACE as NAMESPACE
     from ._literals import literal_from_value as literal_from_value
     from ._literals import value_from_literal as value_from_literal
     from ._ontology import CORE_FILE as CORE_FILE
-    from ._ontology import NAMESPACE as NAMESPACE
     from ._ontology import ONTOLOGY_IRI as ONTOLOGY_IRI
     from ._ontology import Ontology as Ontology
     from ._ontology import core_ontology_path as core_ontology_path
+    from ._replay import replay as replay
+    from ._replay import text_digest as text_digest
     from ._teaching import MAX_TERMS_BYTES as MAX_TERMS_BYTES
     from ._teaching import parse_terms as parse_terms
     from ._teaching import property_turtle as property_turtle
     from ._teaching import relation_turtle as relation_turtle
-    from ._teaching import replay as replay
-    from ._teaching import text_digest as text_digest
 
 __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
     __name__,
@@ -65,7 +65,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "literal_from_value": "._literals",
         "value_from_literal": "._literals",
         "CORE_FILE": "._ontology",
-        "NAMESPACE": "._ontology",
+        "NAMESPACE": "._literals",
         "ONTOLOGY_IRI": "._ontology",
         "Ontology": "._ontology",
         "core_ontology_path": "._ontology",
@@ -73,8 +73,8 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "parse_terms": "._teaching",
         "property_turtle": "._teaching",
         "relation_turtle": "._teaching",
-        "replay": "._teaching",
-        "text_digest": "._teaching",
+        "replay": "._replay",
+        "text_digest": "._replay",
     },
 )
 

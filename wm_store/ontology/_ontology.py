@@ -28,18 +28,13 @@ import functools
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Final
-
-from rdflib import OWL, RDF, RDFS, XSD, Graph, Namespace, URIRef
-from rdflib import Literal as RdfLiteral
-from rdflib.util import guess_format
+from typing import TYPE_CHECKING, Final
 
 from wm_store._errors import OntologyError, ValidationError
-from wm_store.ontology._literals import SKM, literal_from_value
-from wm_store.ontology._model import compile_graph
-from wm_store.ontology._teaching import parse_terms, text_digest, without_known_blank_nodes
+from wm_store.ontology._replay import text_digest
 from wm_store.ontology._terms import (
     CLASS_NAME_RE,
+    SKM_IRI,
     TEMPLATE_NAME_RE,
     TYPED_KINDS,
     ClassInfo,
@@ -48,12 +43,13 @@ from wm_store.ontology._terms import (
 from wm_store.ontology._values import OntologyValues
 from wm_store.protocol import ClassDef, TemplateDef
 
-__all__ = ["CORE_FILE", "NAMESPACE", "ONTOLOGY_IRI", "Ontology", "core_ontology_path"]
+if TYPE_CHECKING:
+    from rdflib import Graph, Namespace
+
+__all__ = ["CORE_FILE", "ONTOLOGY_IRI", "Ontology", "core_ontology_path"]
 
 ONTOLOGY_IRI: Final = "https://skimesh.dev/ontology"
-NAMESPACE: Final = SKM
 CORE_FILE: Final = "skimesh.ttl"
-_FILE_SUFFIXES: Final = (".ttl", ".owl", ".rdf", ".xml", ".nt", ".n3", ".jsonld")
 
 
 def core_ontology_path() -> Path:
@@ -71,37 +67,9 @@ def _humanize(name: str) -> str:
     return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", name).lower()
 
 
-def _parse_into(graph: Graph, source: Path | str) -> None:
-    if isinstance(source, str) and not (
-        "\n" not in source and (source.endswith(_FILE_SUFFIXES) or Path(source).is_file())
-    ):
-        try:
-            graph.parse(data=source, format="turtle")
-        except Exception as exc:  # rdflib raises many types; all mean "bad Turtle"
-            raise OntologyError(f"cannot parse the Turtle text: {exc}") from exc
-        return
-    path = Path(source)
-    if not path.is_file():
-        raise OntologyError(f"ontology file {path} does not exist")
-    try:
-        graph.parse(path, format=guess_format(str(path)) or "turtle")
-    except Exception as exc:
-        raise OntologyError(f"cannot parse {path}: {exc}") from exc
-
-
-def _explicit_iris(iris: Mapping[str, URIRef]) -> dict[str, URIRef]:
+def _explicit_iris(iris: Mapping[str, str]) -> dict[str, str]:
     """The IRIs that are not the default one of their name (``skm:<name>``)."""
-    return {name: iri for name, iri in iris.items() if iri != SKM[name]}
-
-
-def _read(source: Path | str) -> str:
-    """The text of a source (a Turtle text is itself); a file not in Turtle is marked by a
-    leading NUL, so :meth:`Ontology.core_turtle` serializes its graph instead."""
-    if isinstance(source, str) and ("\n" in source or not Path(source).is_file()):
-        return source
-    path = Path(source)
-    text = path.read_text(encoding="utf-8", errors="replace")
-    return text if (guess_format(str(path)) or "turtle") == "turtle" else "\0" + text
+    return {name: iri for name, iri in iris.items() if iri != SKM_IRI + name}
 
 
 @functools.cache
@@ -125,7 +93,7 @@ class Ontology(OntologyValues):
     def __init__(
         self,
         decl: Declarations,
-        graph: Graph,
+        graph: Graph | None,
         *,
         added_classes: tuple[ClassDef, ...] = (),
         added_templates: Mapping[str, TemplateDef] | None = None,
@@ -149,18 +117,57 @@ class Ontology(OntologyValues):
         file name) into one ontology. Raises OntologyError saying what is wrong and where."""
         if not sources:
             raise OntologyError("Ontology.load() needs at least one file or Turtle text")
-        graph = Graph()
-        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
-            graph.bind(prefix, ns)
-        texts = []
-        for source in sources:
-            _parse_into(graph, source)
-            texts.append(_read(source))
+        from wm_store.ontology._graphs import parse_sources
+        from wm_store.ontology._model import compile_graph
+
+        graph, texts = parse_sources(sources)
         decl = compile_graph(graph)
         try:
-            return cls(decl, graph, texts=tuple(texts))
+            return cls(decl, graph, texts=texts)
         except ValidationError as exc:
             raise OntologyError(f"in the ontology files: {exc}") from exc
+
+    @classmethod
+    def from_compiled(cls, data: bytes) -> Ontology:
+        """The ontology encoded by :meth:`compiled_bytes` (no rdflib): the same checks, taught
+        terms and extensions as the one encoded, without its graph. Raises OntologyError
+        when ``data`` is not a compiled ontology of this version's format."""
+        from wm_store.ontology._compiled import decode_compiled
+
+        try:
+            compiled = decode_compiled(data)
+            onto = cls(
+                compiled.declarations(),
+                None,
+                added_classes=compiled.added_classes,
+                added_templates={t.name: t for t in compiled.added_templates},
+            )
+        except (ValueError, ValidationError) as exc:
+            raise OntologyError(f"cannot read the compiled ontology: {exc}") from None
+        onto._digest = compiled.digest
+        return onto
+
+    def compiled_bytes(self, core_digest: str = "") -> bytes:
+        """This ontology compiled (msgpack of :class:`CompiledOntology`), for
+        :meth:`from_compiled`; ``core_digest``: the digest of the core it was built on
+        (default: this ontology's own)."""
+        from wm_store.ontology._compiled import CompiledOntology, encode_compiled
+
+        d = self._decl
+        return encode_compiled(
+            CompiledOntology(
+                classes=d.classes,
+                relations=d.relations,
+                data_properties=d.data_properties,
+                restrictions=d.restrictions,
+                templates=d.templates,
+                datatypes=d.datatypes,
+                iris=d.iris,
+                added_classes=self._added_classes,
+                added_templates=tuple(self._added_templates.values()),
+                digest=core_digest or self._digest,
+            )
+        )
 
     @classmethod
     def default(cls) -> Ontology:
@@ -176,7 +183,7 @@ class Ontology(OntologyValues):
         if not classes and not templates:
             return self
         known = dict(self._decl.classes)
-        taken = {**self._decl.iris, **{k: SKM[k] for k in TYPED_KINDS}}
+        taken = {**self._decl.iris, **{k: SKM_IRI + k for k in TYPED_KINDS}}
         for c in classes:
             what = f"cannot define class {c.name!r}"
             if not CLASS_NAME_RE.fullmatch(c.name):
@@ -230,13 +237,15 @@ class Ontology(OntologyValues):
         result must compile as a whole, and terms already present change nothing (the result
         then equals this ontology, see :meth:`same_terms`). ``source`` names the terms in
         errors. Raises OntologyError."""
+        from rdflib import Graph
+
+        from wm_store.ontology._graphs import bound_graph
+        from wm_store.ontology._teaching import parse_terms, without_known_blank_nodes
+
+        own = self._own_graph("teach")
         parsed = parse_terms(terms, source) if isinstance(terms, str) else terms
-        parsed = without_known_blank_nodes(parsed + Graph(), self._base)
-        base = Graph()
-        for prefix, ns in self._base.namespaces():
-            base.bind(prefix, ns)
-        base += self._base
-        base += parsed
+        parsed = without_known_blank_nodes(parsed + Graph(), own)
+        base = bound_graph(own, parsed)
         taught = Graph()
         if self._taught is not None:
             taught += self._taught
@@ -252,6 +261,8 @@ class Ontology(OntologyValues):
         """``base`` compiled, with the classes and templates :meth:`extend` added replayed on
         it, so an ontology taught nothing new compares equal to this one; when the new terms
         name one of those classes (or declare it again), the whole graph is compiled."""
+        from wm_store.ontology._model import compile_graph
+
         added = list(self._added_templates.values())
         try:
             plain = Ontology(compile_graph(base), base, taught=taught)
@@ -285,7 +296,7 @@ class Ontology(OntologyValues):
         graph serialized), without what :meth:`extend` or :meth:`teach` added."""
         if len(self._texts) == 1 and not self._texts[0].startswith("\0"):
             return self._texts[0]
-        return self._base.serialize(format="turtle")
+        return self._own_graph("core_turtle").serialize(format="turtle")
 
     def same_terms(self, other: Ontology) -> bool:
         """True when both declare the same classes, properties, restrictions and templates
@@ -299,21 +310,36 @@ class Ontology(OntologyValues):
 
     @property
     def namespace(self) -> Namespace:
+        from wm_store.ontology._literals import SKM
+
         return SKM
+
+    @property
+    def compiled(self) -> bool:
+        """True for an ontology decoded from its compiled form (:meth:`from_compiled`): its
+        checks are those of its files, but it has no graph and cannot be taught Turtle."""
+        return self._base is None
+
+    def _own_graph(self, what: str) -> Graph:
+        if self._base is None:
+            raise OntologyError(
+                f"{what} needs the ontology's graph, and this one was decoded from its compiled "
+                "form (it holds the checks, not the RDF): load the OWL files with "
+                "Ontology.load() (rdflib) for that"
+            )
+        return self._base
 
     @property
     def graph(self) -> Graph:
         """Files plus extensions as one rdflib graph (built on first use; read-only)."""
         if self._graph is None:
+            own = self._own_graph("graph")
             if self._added_classes or self._added_templates:
-                merged = Graph()
-                for prefix, ns in self._base.namespaces():
-                    merged.bind(prefix, ns)
-                merged += self._base
-                merged += self._extension_graph()
-                self._graph = merged
+                from wm_store.ontology._graphs import bound_graph
+
+                self._graph = bound_graph(own, self._extension_graph())
             else:
-                self._graph = self._base
+                self._graph = own
         return self._graph
 
     @property
@@ -326,39 +352,23 @@ class Ontology(OntologyValues):
         """Templates added (or replaced) by :meth:`extend`."""
         return tuple(self._added_templates.values())
 
-    def _iri(self, name: str) -> URIRef:
-        return self._decl.iris.get(name, SKM[name])
-
     def _extension_graph(self) -> Graph:
-        g = Graph()
-        g.bind("skm", SKM)
-        g.bind("owl", OWL)
-        head = URIRef(f"{ONTOLOGY_IRI}/runtime-extension")
-        g.add((head, RDF.type, OWL.Ontology))
-        g.add((head, OWL.imports, URIRef(ONTOLOGY_IRI)))
-        for c in self._added_classes:
-            iri, info = SKM[c.name], self._decl.classes[c.name]
-            g.add((iri, RDF.type, OWL.Class))
-            g.add((iri, RDFS.subClassOf, self._iri(c.parent)))
-            g.add((iri, RDFS.label, RdfLiteral(info.label, lang="en")))
-            if c.comment:
-                g.add((iri, RDFS.comment, RdfLiteral(c.comment, lang="en")))
-        for t in self._added_templates.values():
-            iri = SKM[t.name]
-            g.add((iri, RDF.type, OWL.NamedIndividual))
-            g.add((iri, RDF.type, self._iri(t.type)))
-            g.add((iri, SKM.template, RdfLiteral(True)))
-            if t.label:
-                g.add((iri, RDFS.label, RdfLiteral(t.label, lang="en")))
-            for key, value in t.properties.items():
-                g.add((iri, self._iri(key), literal_from_value(value)))
-        return g
+        from wm_store.ontology._graphs import extension_graph
+
+        return extension_graph(
+            ONTOLOGY_IRI,
+            self._added_classes,
+            self._added_templates.values(),
+            self._decl.classes,
+            self._decl.iris,
+        )
 
     def extension_graph(self) -> Graph:
         """What :meth:`teach` and :meth:`extend` added, as one graph (empty if nothing)."""
-        g = Graph()
-        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
-            g.bind(prefix, ns)
+        from wm_store.ontology._graphs import bound_graph
+
+        self._own_graph("extension_graph")  # a compiled ontology does not know what was taught
+        g = bound_graph()
         if self._added_classes or self._added_templates:
             g += self._extension_graph()
         if self._taught is not None:
@@ -368,6 +378,7 @@ class Ontology(OntologyValues):
     def extension_turtle(self) -> str:
         """Turtle of what :meth:`teach` and :meth:`extend` added ("" if nothing); loads with
         the core files."""
+        self._own_graph("extension_turtle")
         if not (self._added_classes or self._added_templates or self._taught):
             return ""
         return self.extension_graph().serialize(format="turtle")
