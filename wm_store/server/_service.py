@@ -16,6 +16,7 @@ Codes: a :class:`~wm_store.WmError`'s own ``code``; meshlink's standard ``bad_re
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 import msgspec
 
@@ -33,7 +34,9 @@ from wm_store.protocol import (
     CardinalityReply,
     ChangesSince,
     CheckCardinality,
+    CompiledOntologyReply,
     ElementsReply,
+    GetCompiledOntology,
     GetElements,
     GetOntology,
     Info,
@@ -50,6 +53,9 @@ from wm_store.protocol import (
 from wm_store.rdf import SparqlWorker
 from wm_store.scene import match_relations, min_cardinality_violations, resolve
 from wm_store.server._store import WmStore
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["MAX_REQUEST_BYTES", "WmService"]
 
@@ -81,6 +87,20 @@ class WmService:
         )
         self.query: RequestHandler[Request, Reply] = RequestHandler(
             Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
+        )
+        self._compiled: tuple[Ontology, bytes] | None = None
+        """The store's ontology and its compiled bytes, encoded once per ontology."""
+
+    def _compiled_ontology(self) -> CompiledOntologyReply:
+        """The store's ontology compiled, with how much of its log that covers."""
+        store = self.store
+        if self._compiled is None or self._compiled[0] is not store.ontology:
+            self._compiled = (store.ontology, store.ontology.compiled_bytes(store.core_digest))
+        return CompiledOntologyReply(
+            revision=store.state.revision,
+            taught=len(store.state.ontology_log),
+            core_digest=store.core_digest,
+            compiled=self._compiled[1],
         )
 
     def _sync(self, revision: int | None) -> tuple[str, bytes, int]:
@@ -181,6 +201,8 @@ class WmService:
                 return store.info()
             case GetOntology():
                 return store.ontology_reply()
+            case GetCompiledOntology():
+                return self._compiled_ontology()
             case CheckCardinality(ids=ids):
                 checked, violations = min_cardinality_violations(state, store.ontology, ids)
                 return CardinalityReply(
