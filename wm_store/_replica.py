@@ -6,6 +6,13 @@ a subscriber that joined late, a store restart): the replica asks for ``changes-
 revision and, if the store no longer keeps them, reloads a snapshot. Changes it already has are
 ignored, so nothing is applied twice and nothing is lost.
 
+The replica checks against the store's ontology, taken compiled from the store
+(:class:`~wm_store.protocol.GetCompiledOntology`, before each snapshot): no rdflib in the
+process. Classes and templates defined later extend it here; taught Turtle terms make it fetch
+the store's again before the change that carries them is applied (a compiled ontology parses
+no Turtle). A store that serves none (an older version) makes it parse the ontology files and
+replay the store's log itself, as it does when given a core.
+
 A gap at the very end of a burst is invisible until the next change arrives; whoever waits
 for a revision (:meth:`Replica.wait_for_revision`) therefore pulls the missing changes itself
 if they do not arrive within ``catch_up_after`` seconds.
