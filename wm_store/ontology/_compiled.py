@@ -7,8 +7,10 @@ The OWL files stay the single source of truth: the store parses them (rdflib) an
 form on its read-only key (:class:`~wm_store.protocol.GetCompiledOntology`), so a replica or
 client checks against the site's ontology, taught terms included, without an RDF library. The
 closures (subclasses, sub-properties, inherited domains) are recomputed from it on decoding,
-as they are after parsing. :data:`COMPILED_FORMAT` changes whenever the Struct does: a reader
-refuses another one with an OntologyError instead of misreading it.
+as they are after parsing. It also carries the store's core Turtle and log, so a process that
+asks for the graph (a SPARQL query, ``wm export``) rebuilds it then. :data:`COMPILED_FORMAT`
+changes whenever the Struct does: a reader refuses another one with an OntologyError instead
+of misreading it.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from wm_store.ontology._terms import (
     Declarations,
     RelationInfo,
 )
-from wm_store.protocol import ClassDef, TemplateDef
+from wm_store.protocol import ClassDef, OntologyDelta, TemplateDef
 
 __all__ = ["COMPILED_FORMAT", "CompiledOntology", "decode_compiled", "encode_compiled"]
 
@@ -33,7 +35,10 @@ COMPILED_FORMAT: Final = 1
 
 
 class CompiledOntology(msgspec.Struct, frozen=True, kw_only=True):
-    """An ontology's declarations and run-time additions; ``digest`` is its core's."""
+    """An ontology's declarations and run-time additions; ``digest`` is its core's. ``core``
+    and ``taught``: the core's Turtle and the ontology log it holds, from which the graph is
+    rebuilt (rdflib) when one is asked for (SPARQL, Turtle export and import); empty when the
+    sources were not given."""
 
     format: int = COMPILED_FORMAT
     classes: dict[str, ClassInfo]
@@ -46,6 +51,8 @@ class CompiledOntology(msgspec.Struct, frozen=True, kw_only=True):
     added_classes: tuple[ClassDef, ...] = ()
     added_templates: tuple[TemplateDef, ...] = ()
     digest: str = ""
+    core: str = ""
+    taught: tuple[OntologyDelta, ...] = ()
 
     def declarations(self) -> Declarations:
         return Declarations(

@@ -41,7 +41,7 @@ from wm_store.ontology._terms import (
     Declarations,
 )
 from wm_store.ontology._values import OntologyValues
-from wm_store.protocol import ClassDef, TemplateDef
+from wm_store.protocol import ClassDef, ClassDefined, OntologyDelta, TemplateDef, TemplateDefined
 
 if TYPE_CHECKING:
     from rdflib import Graph, Namespace
@@ -86,6 +86,8 @@ class Ontology(OntologyValues):
         "_base",
         "_digest",
         "_graph",
+        "_parsed",
+        "_sources",
         "_taught",
         "_texts",
     )
@@ -99,8 +101,12 @@ class Ontology(OntologyValues):
         added_templates: Mapping[str, TemplateDef] | None = None,
         texts: tuple[str, ...] = (),
         taught: Graph | None = None,
+        sources: tuple[str, tuple[OntologyDelta, ...]] | None = None,
     ) -> None:
         self._base = graph
+        self._sources = sources
+        """For a compiled ontology (no graph): the core Turtle and the log it holds."""
+        self._parsed: Ontology | None = None
         self._texts = texts
         self._digest = text_digest("\n".join(texts)) if texts else ""
         self._taught = taught
@@ -141,16 +147,25 @@ class Ontology(OntologyValues):
                 None,
                 added_classes=compiled.added_classes,
                 added_templates={t.name: t for t in compiled.added_templates},
+                sources=(compiled.core, compiled.taught) if compiled.core else None,
             )
         except (ValueError, ValidationError) as exc:
             raise OntologyError(f"cannot read the compiled ontology: {exc}") from None
         onto._digest = compiled.digest
         return onto
 
-    def compiled_bytes(self, core_digest: str = "") -> bytes:
+    def compiled_bytes(
+        self,
+        core_digest: str = "",
+        *,
+        core: str = "",
+        taught: Sequence[OntologyDelta] = (),
+    ) -> bytes:
         """This ontology compiled (msgpack of :class:`CompiledOntology`), for
         :meth:`from_compiled`; ``core_digest``: the digest of the core it was built on
-        (default: this ontology's own)."""
+        (default: this ontology's own). ``core`` and ``taught``: the core's Turtle and the
+        ontology log this ontology is (:func:`replay` of them), so the decoded one can rebuild
+        its graph when asked (else it has none)."""
         from wm_store.ontology._compiled import CompiledOntology, encode_compiled
 
         d = self._decl
@@ -166,6 +181,8 @@ class Ontology(OntologyValues):
                 added_classes=self._added_classes,
                 added_templates=tuple(self._added_templates.values()),
                 digest=core_digest or self._digest,
+                core=core,
+                taught=tuple(taught),
             )
         )
 
@@ -223,12 +240,19 @@ class Ontology(OntologyValues):
             )
             all_templates[t.name] = added[t.name] = copy
         decl = dataclasses.replace(self._decl, classes=known, templates=all_templates)
+        sources = None
+        if self._sources is not None:  # the log of a compiled ontology grows with it
+            core, log = self._sources
+            more: list[OntologyDelta] = [ClassDefined(cls=c) for c in classes]
+            more += [TemplateDefined(template=t) for t in templates]
+            sources = (core, (*log, *more))
         return Ontology(
             decl,
             self._base,
             added_classes=self._added_classes + tuple(classes),
             added_templates=added,
             taught=self._taught,
+            sources=sources,
         )
 
     def teach(self, terms: str | Graph, *, source: str = "") -> Ontology:
@@ -242,7 +266,9 @@ class Ontology(OntologyValues):
         from wm_store.ontology._graphs import bound_graph
         from wm_store.ontology._teaching import parse_terms, without_known_blank_nodes
 
-        own = self._own_graph("teach")
+        if self._base is None:
+            return self._parsed_form("teach").teach(terms, source=source)
+        own = self._base
         parsed = parse_terms(terms, source) if isinstance(terms, str) else terms
         parsed = without_known_blank_nodes(parsed + Graph(), own)
         base = bound_graph(own, parsed)
@@ -296,7 +322,9 @@ class Ontology(OntologyValues):
         graph serialized), without what :meth:`extend` or :meth:`teach` added."""
         if len(self._texts) == 1 and not self._texts[0].startswith("\0"):
             return self._texts[0]
-        return self._own_graph("core_turtle").serialize(format="turtle")
+        if self._base is None:
+            return self._parsed_form("core_turtle").core_turtle()
+        return self._base.serialize(format="turtle")
 
     def same_terms(self, other: Ontology) -> bool:
         """True when both declare the same classes, properties, restrictions and templates
@@ -317,23 +345,32 @@ class Ontology(OntologyValues):
     @property
     def compiled(self) -> bool:
         """True for an ontology decoded from its compiled form (:meth:`from_compiled`): its
-        checks are those of its files, but it has no graph and cannot be taught Turtle."""
+        checks are those of its files; what needs its graph (:attr:`graph`, :meth:`teach`,
+        the extension's Turtle) parses its sources first (rdflib)."""
         return self._base is None
 
-    def _own_graph(self, what: str) -> Graph:
-        if self._base is None:
-            raise OntologyError(
-                f"{what} needs the ontology's graph, and this one was decoded from its compiled "
-                "form (it holds the checks, not the RDF): load the OWL files with "
-                "Ontology.load() (rdflib) for that"
-            )
-        return self._base
+    def _parsed_form(self, what: str) -> Ontology:
+        """A compiled ontology parsed: its core Turtle and log replayed with rdflib (once), for
+        what needs the graph. OntologyError when it was compiled without them."""
+        if self._parsed is None:
+            if self._sources is None:
+                raise OntologyError(
+                    f"{what} needs the ontology's graph, and this one was decoded from a compiled "
+                    "form without its sources: load the OWL files with Ontology.load() (rdflib)"
+                )
+            from wm_store.ontology._replay import replay
+
+            core, log = self._sources
+            self._parsed = replay(Ontology.load(core), log)
+        return self._parsed
 
     @property
     def graph(self) -> Graph:
         """Files plus extensions as one rdflib graph (built on first use; read-only)."""
+        if self._base is None:
+            return self._parsed_form("graph").graph
         if self._graph is None:
-            own = self._own_graph("graph")
+            own = self._base
             if self._added_classes or self._added_templates:
                 from wm_store.ontology._graphs import bound_graph
 
@@ -367,7 +404,8 @@ class Ontology(OntologyValues):
         """What :meth:`teach` and :meth:`extend` added, as one graph (empty if nothing)."""
         from wm_store.ontology._graphs import bound_graph
 
-        self._own_graph("extension_graph")  # a compiled ontology does not know what was taught
+        if self._base is None:
+            return self._parsed_form("extension_graph").extension_graph()
         g = bound_graph()
         if self._added_classes or self._added_templates:
             g += self._extension_graph()
@@ -378,7 +416,8 @@ class Ontology(OntologyValues):
     def extension_turtle(self) -> str:
         """Turtle of what :meth:`teach` and :meth:`extend` added ("" if nothing); loads with
         the core files."""
-        self._own_graph("extension_turtle")
+        if self._base is None:
+            return self._parsed_form("extension_turtle").extension_turtle()
         if not (self._added_classes or self._added_templates or self._taught):
             return ""
         return self.extension_graph().serialize(format="turtle")

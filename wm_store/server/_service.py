@@ -88,19 +88,24 @@ class WmService:
         self.query: RequestHandler[Request, Reply] = RequestHandler(
             Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
         )
-        self._compiled: tuple[Ontology, bytes] | None = None
-        """The store's ontology and its compiled bytes, encoded once per ontology."""
+        self._compiled: tuple[Ontology, int, bytes] | None = None
+        """The store's ontology, the length of its log and its compiled bytes (encoded once
+        per ontology)."""
 
     def _compiled_ontology(self) -> CompiledOntologyReply:
-        """The store's ontology compiled, with how much of its log that covers."""
-        store = self.store
-        if self._compiled is None or self._compiled[0] is not store.ontology:
-            self._compiled = (store.ontology, store.ontology.compiled_bytes(store.core_digest))
+        """The store's ontology compiled, with its core's Turtle and log (so a client can
+        rebuild the graph if it needs one) and how much of the log that covers."""
+        store, log = self.store, self.store.state.ontology_log
+        cached = self._compiled
+        if cached is None or cached[0] is not store.ontology or cached[1] != len(log):
+            digest, core = store.core_ontology()
+            data = store.ontology.compiled_bytes(digest, core=core, taught=log)
+            self._compiled = cached = (store.ontology, len(log), data)
         return CompiledOntologyReply(
             revision=store.state.revision,
-            taught=len(store.state.ontology_log),
+            taught=len(log),
             core_digest=store.core_digest,
-            compiled=self._compiled[1],
+            compiled=cached[2],
         )
 
     def _sync(self, revision: int | None) -> tuple[str, bytes, int]:

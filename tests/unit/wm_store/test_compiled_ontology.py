@@ -15,6 +15,7 @@ from pathlib import Path
 
 import msgspec
 import pytest
+from rdflib.compare import isomorphic
 
 from meshlink.rpc import BAD_REQUEST, ErrorReply, encode
 from tests.unit.wm_store.stores import running
@@ -26,18 +27,23 @@ from wm_store import (
     ValidationError,
     WmClient,
 )
-from wm_store.ontology import Ontology, core_ontology_path, relation_turtle
+from wm_store.ontology import Ontology, core_ontology_path, relation_turtle, replay
 from wm_store.protocol import (
     ClassDef,
+    ClassDefined,
     CompiledOntologyReply,
     DefineClass,
     GetCompiledOntology,
+    OntologyDelta,
     Reply,
     Request,
     TemplateDef,
+    TermsDef,
+    TermsDefined,
     Transact,
     decode_reply,
 )
+from wm_store.rdf import export_turtle
 from wm_store.server import WmService, WmStore
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -109,10 +115,30 @@ def test_taught_terms_and_extensions_survive_compiling() -> None:
     assert decoded.relation("inspectedBy").domains == frozenset({"Part"})
     more = decoded.extend(classes=[ClassDef(name="VBelt", parent="Pulley")])
     assert more.is_a("VBelt", "Part") and more.compiled
-    with pytest.raises(OntologyError, match=r"compiled form.*Ontology\.load"):
+    with pytest.raises(OntologyError, match=r"without its sources.*Ontology\.load"):
         decoded.teach(relation_turtle("checkedBy"))
-    with pytest.raises(OntologyError, match="compiled form"):
+    with pytest.raises(OntologyError, match="without its sources"):
         _ = decoded.graph
+
+
+def test_with_its_sources_a_compiled_ontology_rebuilds_its_graph() -> None:
+    """What the store serves carries its core's Turtle and log: the graph (for SPARQL, Turtle
+    export and import) is rebuilt on demand, equal to the store's, extensions included."""
+    core = core_ontology_path().read_text()
+    log: list[OntologyDelta] = [
+        TermsDefined(terms=TermsDef(turtle=BEARING, source="cli")),
+        ClassDefined(cls=ClassDef(name="Pulley", parent="Part")),
+    ]
+    store_onto = replay(Ontology.load(core), log)
+    decoded = Ontology.from_compiled(store_onto.compiled_bytes(core=core, taught=log))
+    assert_equivalent(decoded, store_onto)
+    more = decoded.extend(classes=[ClassDef(name="VBelt", parent="Pulley")])
+    expected = store_onto.extend(classes=[ClassDef(name="VBelt", parent="Pulley")])
+    assert isomorphic(more.graph, expected.graph)
+    assert isomorphic(more.extension_graph(), expected.extension_graph())
+    assert more.core_turtle() == expected.core_turtle()
+    taught = more.teach(relation_turtle("checkedBy", domain=["Part"]))
+    assert not taught.compiled and taught.is_a("VBelt", "Part") and "checkedBy" in taught.relations
 
 
 def test_another_format_or_garbage_is_refused_by_name() -> None:
@@ -188,6 +214,9 @@ async def test_a_replica_follows_the_stores_compiled_ontology() -> None:
         pulley = await wm.add_element("Pulley", "p")
         assert wm.ontology.is_a("Pulley", "Part") and wm.ontology.same_terms(s.ontology)
         assert pulley in wm.replica.state
+        # Turtle export (wm export) needs the graph: rebuilt from what the store sent
+        exported = export_turtle(wm.replica.state, wm.ontology)
+        assert exported == export_turtle(s.state, s.ontology)
 
 
 @pytest.mark.anyio
