@@ -307,7 +307,12 @@ class Replica:
     def _teaches_beyond(self, change: Change) -> bool:
         """``change`` teaches terms the store's compiled ontology, as this replica holds it,
         lacks: a compiled ontology parses no Turtle, so the store's is fetched first."""
-        if not self._from_store or not any(isinstance(d, TermsDefined) for d in change.deltas):
+        if not self._from_store:
+            return False
+        for delta in change.deltas:  # a plain loop: this runs for every change of the stream
+            if isinstance(delta, TermsDefined):
+                break
+        else:
             return False
         ontological = [d for d in change.deltas if isinstance(d, _ONTOLOGY_DELTAS)]
         new = ontological[max(0, self._covered - len(self.state.ontology_log)) :]
