@@ -123,8 +123,10 @@ class WmClient:
 
         The client checks against the store's ontology: the core plus everything taught to the
         store (files it started with, a scenario's terms, agents' terms, ``wm teach``), and
-        follows what is taught later. ``ontology``: replay the store's teaching on this core
-        instead of the store's own (tests)."""
+        follows what is taught later. It takes it compiled from the store (no rdflib in this
+        process); a store of an older version makes it parse the ontology files itself.
+        ``ontology``: replay the store's teaching on this core instead of the store's own
+        (tests)."""
         client = cls(transport, ontology, author=author, timeout=timeout)
         try:
             async with anyio.create_task_group() as tg:

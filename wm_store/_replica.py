@@ -6,6 +6,13 @@ a subscriber that joined late, a store restart): the replica asks for ``changes-
 revision and, if the store no longer keeps them, reloads a snapshot. Changes it already has are
 ignored, so nothing is applied twice and nothing is lost.
 
+The replica checks against the store's ontology, taken compiled from the store
+(:class:`~wm_store.protocol.GetCompiledOntology`, before each snapshot): no rdflib in the
+process. Classes and templates defined later extend it here; taught Turtle terms make it fetch
+the store's again before the change that carries them is applied (a compiled ontology parses
+no Turtle). A store that serves none (an older version) makes it parse the ontology files and
+replay the store's log itself, as it does when given a core.
+
 A gap at the very end of a burst is invisible until the next change arrives; whoever waits
 for a revision (:meth:`Replica.wait_for_revision`) therefore pulls the missing changes itself
 if they do not arrive within ``catch_up_after`` seconds.
@@ -24,14 +31,22 @@ import msgspec
 from anyio.abc import TaskStatus
 from anyio.streams.memory import MemoryObjectSendStream
 
-from wm_store import ontology as onto  # a lazy face: rdflib loads with the first ontology
-from wm_store._errors import HistoryCompactedError, RevisionTimeoutError, WmError
+from wm_store import ontology as onto  # a lazy face; a compiled ontology needs no rdflib
+from wm_store._errors import (
+    HistoryCompactedError,
+    OntologyError,
+    ProtocolError,
+    RevisionTimeoutError,
+    WmError,
+)
 from wm_store._transport import WmTransport, raise_for_error
 from wm_store.protocol import (
     Change,
     ChangesReply,
     ChangesSince,
     ClassDefined,
+    CompiledOntologyReply,
+    GetCompiledOntology,
     GetOntology,
     Info,
     InfoReply,
@@ -48,10 +63,16 @@ if TYPE_CHECKING:
 
 __all__ = ["Replica", "ReplicaStats"]
 
+_ONTOLOGY_DELTAS = (ClassDefined, TemplateDefined, TermsDefined)
+
 _log = logging.getLogger(__name__)
 
 _RECENT = 1024
 """How many digests of applied changes a replica keeps to compare with the store's."""
+
+
+def _spatial_of(ontology: Ontology) -> frozenset[str]:
+    return frozenset(n for n, r in ontology.relations.items() if r.spatial)
 
 
 class ReplicaStats(msgspec.Struct, frozen=True):
@@ -78,14 +99,23 @@ class Replica:
         """Seconds between two checks of this replica against the store (revision and digest;
         0: never)."""
         self._own_base = base_ontology is not None
-        self.base_ontology = base_ontology or onto.Ontology.default()
-        """The core the store's ontology log is replayed on: the store's own core (this
-        process's core file when the digests agree, else fetched), or the one given."""
-        self.ontology = self.base_ontology
+        self._base = base_ontology
+        """The core the store's ontology log is replayed on when this process parses the OWL
+        files itself (rdflib): the one given, or this process's core file (the store's own
+        when the digests agree, else fetched). None while the store's compiled ontology is
+        followed."""
+        self._from_store = base_ontology is None
+        """Follow the store's compiled ontology (:class:`GetCompiledOntology`: no rdflib);
+        False when a core was given, or the store serves no compiled ontology (an older
+        version)."""
+        self._ontology = base_ontology
+        self._covered = 0
+        """How many deltas of the store's ontology log :attr:`ontology` holds (a compiled
+        ontology may hold more than the replica has applied: those are skipped)."""
         self.timeout = timeout
         self.catch_up_after = catch_up_after
         self.state = SceneState()
-        self._spatial = frozenset(n for n, r in self.base_ontology.relations.items() if r.spatial)
+        self._spatial = _spatial_of(base_ontology) if base_ontology else frozenset()
         self.state.set_spatial_predicates(self._spatial)
         self._lock = anyio.Lock(fast_acquire=True)
         """Held while a change is pulled or a snapshot reloaded (they await the store); the
@@ -106,6 +136,14 @@ class Replica:
         self.divergences = 0
         """How many times the replica found it had applied what the store never committed."""
         self._reloaded = anyio.Event()
+
+    @property
+    def ontology(self) -> Ontology:
+        """The store's ontology as of this replica's revision: core and what was taught (the
+        core file's, parsed here, if read before the first snapshot)."""
+        if self._ontology is None:
+            self._ontology = onto.Ontology.default()
+        return self._ontology
 
     @property
     def revision(self) -> int:
@@ -175,7 +213,11 @@ class Replica:
     def _next(self, change: Change) -> bool:
         """``change`` follows the replica's revision and no pull or reload is under way: it
         can be applied at once (applying never awaits, so nothing interleaves with it)."""
-        return change.revision == self.state.revision + 1 and not self._lock.locked()
+        return (
+            change.revision == self.state.revision + 1
+            and not self._lock.locked()
+            and not self._teaches_beyond(change)
+        )
 
     async def _accept(self, change: Change) -> None:
         if change.revision <= self.state.revision:
@@ -189,7 +231,7 @@ class Replica:
             await self._pull()
             if change.revision != self.state.revision + 1:
                 return
-        self._apply(change)
+        await self._apply_fetching(change)
 
     async def _pull(self) -> None:
         """Fetch every change after our revision (or a snapshot if they are gone)."""
@@ -202,17 +244,29 @@ class Replica:
         assert isinstance(reply, ChangesReply)
         for change in reply.changes:
             if change.revision == self.state.revision + 1:
-                self._apply(change)
+                await self._apply_fetching(change)
 
     async def _load_snapshot(self) -> None:
+        if self._from_store:
+            await self._fetch_compiled()  # before the snapshot: it holds at most its log
         reply = raise_for_error(await self.transport.request(Snapshot(), timeout=self.timeout))
         assert isinstance(reply, SnapshotReply)
-        if not self._own_base and reply.core_digest not in ("", self.base_ontology.digest):
-            await self._fetch_core()
+        log = reply.ontology
+        if (
+            self._from_store
+            and (
+                self._covered > len(log)  # a store restarted in between, with a shorter log
+                or any(isinstance(d, TermsDefined) for d in log[self._covered :])  # terms taught
+            )
+        ):
+            await self._fetch_compiled()  # now it holds at least the snapshot's log
+        if not self._from_store:
+            await self._use_files(reply.core_digest)
+        if tail := log[self._covered :]:
+            self._ontology = await anyio.to_thread.run_sync(onto.replay, self.ontology, tail)
+        self._covered = max(self._covered, len(log))
+        self._spatial = _spatial_of(self.ontology)
         state = SceneState.from_snapshot(reply, self._spatial)
-        self.ontology = await anyio.to_thread.run_sync(
-            onto.replay, self.base_ontology, state.ontology_log
-        )
         self.state = state
         self._recent = {state.revision: state.digest}
         self._follow_spatial()
@@ -221,15 +275,65 @@ class Replica:
         self._reloaded = anyio.Event()
         self._notify()
 
+    async def _fetch_compiled(self) -> bool:
+        """Take the store's ontology, compiled (no rdflib here); False when the store serves
+        none this version reads (an older store): this replica parses the ontology files
+        itself from then on."""
+        request = GetCompiledOntology()
+        try:
+            reply = raise_for_error(await self.transport.request(request, timeout=self.timeout))
+            assert isinstance(reply, CompiledOntologyReply)
+            ontology = onto.Ontology.from_compiled(reply.compiled)
+        except (ProtocolError, OntologyError) as exc:
+            _log.warning(
+                "the world-model store serves no compiled ontology this version reads (%s): "
+                "this process parses the ontology files itself (rdflib)",
+                exc,
+            )
+            self._from_store = False
+            return False
+        self._ontology, self._covered = ontology, reply.taught
+        return True
+
+    async def _use_files(self, core_digest: str) -> None:
+        """Start from a core parsed here (rdflib): this process's core file, or the store's
+        core text when ``core_digest`` says the store runs another one."""
+        if self._base is None:
+            self._base = await anyio.to_thread.run_sync(onto.Ontology.default)
+        if not self._own_base and core_digest not in ("", self._base.digest):
+            await self._fetch_core()
+        self._ontology, self._covered = self._base, 0
+
+    def _teaches_beyond(self, change: Change) -> bool:
+        """``change`` teaches terms the store's compiled ontology, as this replica holds it,
+        lacks: a compiled ontology parses no Turtle, so the store's is fetched first."""
+        if not self._from_store:
+            return False
+        for delta in change.deltas:  # a plain loop: this runs for every change of the stream
+            if isinstance(delta, TermsDefined):
+                break
+        else:
+            return False
+        ontological = [d for d in change.deltas if isinstance(d, _ONTOLOGY_DELTAS)]
+        new = ontological[max(0, self._covered - len(self.state.ontology_log)) :]
+        return any(isinstance(d, TermsDefined) for d in new)
+
+    async def _apply_fetching(self, change: Change) -> None:
+        """:meth:`_apply`, after fetching the store's ontology when ``change`` teaches terms."""
+        if self._teaches_beyond(change) and not await self._fetch_compiled():
+            await self._load_snapshot()  # parsed here from now on; the snapshot holds it
+            return
+        self._apply(change)
+
     async def _fetch_core(self) -> None:
         """The store runs another core ontology than this process's file: take the store's."""
         reply = raise_for_error(await self.transport.request(GetOntology(), timeout=self.timeout))
         assert isinstance(reply, OntologyReply)
         _log.info("the store's core ontology differs from this process's file; using the store's")
-        self.base_ontology = await anyio.to_thread.run_sync(onto.Ontology.load, reply.core)
+        self._base = await anyio.to_thread.run_sync(onto.Ontology.load, reply.core)
 
     def _follow_spatial(self) -> None:
-        spatial = frozenset(n for n, r in self.ontology.relations.items() if r.spatial)
+        spatial = _spatial_of(self.ontology)
         if spatial != self._spatial or spatial != self.state.spatial_predicates:
             self._spatial = spatial
             self.state.set_spatial_predicates(spatial)
@@ -237,8 +341,11 @@ class Replica:
     def _apply(self, change: Change) -> None:
         for delta in change.deltas:
             self.state.apply(delta)
-            if isinstance(delta, ClassDefined | TemplateDefined | TermsDefined):
-                self.ontology = onto.replay(self.ontology, [delta])
+            if isinstance(delta, _ONTOLOGY_DELTAS):
+                log = self.state.ontology_log
+                if len(log) > self._covered:  # else the compiled ontology holds it already
+                    self._ontology = onto.replay(self.ontology, log[self._covered :])
+                    self._covered = len(log)
                 self._follow_spatial()
         self.state.revision = change.revision
         self.state.digest = change.digest

@@ -1,10 +1,13 @@
 """The ontology: the OWL classes, relations and typed data properties the world model is
-written in, loaded once with rdflib and checked on every write.
+written in, parsed from the OWL files with rdflib (by the store, tools and tests) and checked on
+every write.
 
 - :class:`Ontology`: the loaded ontology (taxonomy, relations, data properties, cardinalities,
   default individuals) with the checks the store runs; immutable, extended at run time with
   :meth:`Ontology.extend` (a class or template) and :meth:`Ontology.teach` (any Turtle terms).
-  :func:`core_ontology_path` finds ``ontologies/skimesh.ttl``.
+  :func:`core_ontology_path` finds ``ontologies/skimesh.ttl``. :meth:`Ontology.compiled_bytes`
+  / :meth:`Ontology.from_compiled`: the same checks in a msgspec form that decodes without
+  rdflib (what the store serves its replicas; the OWL files stay the source).
 - :func:`replay`: the core plus the store's ontology log (what was taught, in order), as the
   store, every replica and a restarted store rebuild it; :func:`parse_terms`,
   :func:`relation_turtle`, :func:`property_turtle` and :func:`text_digest` serve teaching.
@@ -15,12 +18,16 @@ written in, loaded once with rdflib and checked on every write.
   ontology's own errors do.
 
 Inside: ``_ontology`` (loading and extension), the layers the checks are built from
-(``_taxonomy``, ``_cardinality``, ``_values``), the graph compiler (``_model`` with ``_reader``
-and ``_properties``), the shared vocabulary (``_terms``, ``_literals``) and ``_vocab``.
+(``_taxonomy``, ``_cardinality``, ``_values``, ``_typed``), the graph compiler (``_model`` with
+``_reader`` and ``_properties``), the rdflib side of an ontology (``_graphs``), the compiled form
+(``_compiled``), replaying the ontology log (``_replay``), the shared vocabulary (``_terms``,
+``_literals``) and ``_vocab``.
 How to extend the ontology: docs/guides/extend-the-ontology.md.
 
-The name constants and the vocabulary (``_vocab``, ``_terms``) import without rdflib; the rest
-loads on first use (PEP 562 ``__getattr__``): rdflib is imported with the first ontology.
+The name constants and the vocabulary (``_vocab``, ``_terms``) import at once; the rest loads on
+first use (PEP 562 ``__getattr__``). rdflib is imported when an ontology is parsed
+(:meth:`Ontology.load`, :meth:`Ontology.default`, :meth:`Ontology.teach`) or its graph is used,
+never for an ontology decoded from its compiled form.
 """
 
 from __future__ import annotations
@@ -45,19 +52,19 @@ from ._vocab import Rel as Rel
 from ._vocab import Tpl as Tpl
 
 if TYPE_CHECKING:
+    from ._literals import NAMESPACE as NAMESPACE
     from ._literals import literal_from_value as literal_from_value
     from ._literals import value_from_literal as value_from_literal
     from ._ontology import CORE_FILE as CORE_FILE
-    from ._ontology import NAMESPACE as NAMESPACE
     from ._ontology import ONTOLOGY_IRI as ONTOLOGY_IRI
     from ._ontology import Ontology as Ontology
     from ._ontology import core_ontology_path as core_ontology_path
+    from ._replay import replay as replay
+    from ._replay import text_digest as text_digest
     from ._teaching import MAX_TERMS_BYTES as MAX_TERMS_BYTES
     from ._teaching import parse_terms as parse_terms
     from ._teaching import property_turtle as property_turtle
     from ._teaching import relation_turtle as relation_turtle
-    from ._teaching import replay as replay
-    from ._teaching import text_digest as text_digest
 
 __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
     __name__,
@@ -65,7 +72,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "literal_from_value": "._literals",
         "value_from_literal": "._literals",
         "CORE_FILE": "._ontology",
-        "NAMESPACE": "._ontology",
+        "NAMESPACE": "._literals",
         "ONTOLOGY_IRI": "._ontology",
         "Ontology": "._ontology",
         "core_ontology_path": "._ontology",
@@ -73,8 +80,8 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "parse_terms": "._teaching",
         "property_turtle": "._teaching",
         "relation_turtle": "._teaching",
-        "replay": "._teaching",
-        "text_digest": "._teaching",
+        "replay": "._replay",
+        "text_digest": "._replay",
     },
 )
 

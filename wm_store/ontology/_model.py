@@ -150,5 +150,5 @@ def compile_graph(graph: Graph) -> Declarations:
         restrictions=tuple(_read_restrictions(r)),
         templates=_read_templates(r),
         datatypes=frozenset(r.datatypes.values()),
-        iris={name: iri for name, (_, iri) in r.names.items()},
+        iris={name: str(iri) for name, (_, iri) in r.names.items()},
     )

@@ -28,32 +28,28 @@ import functools
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Final
-
-from rdflib import OWL, RDF, RDFS, XSD, Graph, Namespace, URIRef
-from rdflib import Literal as RdfLiteral
-from rdflib.util import guess_format
+from typing import TYPE_CHECKING, Final
 
 from wm_store._errors import OntologyError, ValidationError
-from wm_store.ontology._literals import SKM, literal_from_value
-from wm_store.ontology._model import compile_graph
-from wm_store.ontology._teaching import parse_terms, text_digest, without_known_blank_nodes
+from wm_store.ontology._replay import text_digest
 from wm_store.ontology._terms import (
     CLASS_NAME_RE,
+    SKM_IRI,
     TEMPLATE_NAME_RE,
     TYPED_KINDS,
     ClassInfo,
     Declarations,
 )
 from wm_store.ontology._values import OntologyValues
-from wm_store.protocol import ClassDef, TemplateDef
+from wm_store.protocol import ClassDef, ClassDefined, OntologyDelta, TemplateDef, TemplateDefined
 
-__all__ = ["CORE_FILE", "NAMESPACE", "ONTOLOGY_IRI", "Ontology", "core_ontology_path"]
+if TYPE_CHECKING:
+    from rdflib import Graph, Namespace
+
+__all__ = ["CORE_FILE", "ONTOLOGY_IRI", "Ontology", "core_ontology_path"]
 
 ONTOLOGY_IRI: Final = "https://skimesh.dev/ontology"
-NAMESPACE: Final = SKM
 CORE_FILE: Final = "skimesh.ttl"
-_FILE_SUFFIXES: Final = (".ttl", ".owl", ".rdf", ".xml", ".nt", ".n3", ".jsonld")
 
 
 def core_ontology_path() -> Path:
@@ -71,37 +67,9 @@ def _humanize(name: str) -> str:
     return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", name).lower()
 
 
-def _parse_into(graph: Graph, source: Path | str) -> None:
-    if isinstance(source, str) and not (
-        "\n" not in source and (source.endswith(_FILE_SUFFIXES) or Path(source).is_file())
-    ):
-        try:
-            graph.parse(data=source, format="turtle")
-        except Exception as exc:  # rdflib raises many types; all mean "bad Turtle"
-            raise OntologyError(f"cannot parse the Turtle text: {exc}") from exc
-        return
-    path = Path(source)
-    if not path.is_file():
-        raise OntologyError(f"ontology file {path} does not exist")
-    try:
-        graph.parse(path, format=guess_format(str(path)) or "turtle")
-    except Exception as exc:
-        raise OntologyError(f"cannot parse {path}: {exc}") from exc
-
-
-def _explicit_iris(iris: Mapping[str, URIRef]) -> dict[str, URIRef]:
+def _explicit_iris(iris: Mapping[str, str]) -> dict[str, str]:
     """The IRIs that are not the default one of their name (``skm:<name>``)."""
-    return {name: iri for name, iri in iris.items() if iri != SKM[name]}
-
-
-def _read(source: Path | str) -> str:
-    """The text of a source (a Turtle text is itself); a file not in Turtle is marked by a
-    leading NUL, so :meth:`Ontology.core_turtle` serializes its graph instead."""
-    if isinstance(source, str) and ("\n" in source or not Path(source).is_file()):
-        return source
-    path = Path(source)
-    text = path.read_text(encoding="utf-8", errors="replace")
-    return text if (guess_format(str(path)) or "turtle") == "turtle" else "\0" + text
+    return {name: iri for name, iri in iris.items() if iri != SKM_IRI + name}
 
 
 @functools.cache
@@ -118,6 +86,8 @@ class Ontology(OntologyValues):
         "_base",
         "_digest",
         "_graph",
+        "_parsed",
+        "_sources",
         "_taught",
         "_texts",
     )
@@ -125,14 +95,18 @@ class Ontology(OntologyValues):
     def __init__(
         self,
         decl: Declarations,
-        graph: Graph,
+        graph: Graph | None,
         *,
         added_classes: tuple[ClassDef, ...] = (),
         added_templates: Mapping[str, TemplateDef] | None = None,
         texts: tuple[str, ...] = (),
         taught: Graph | None = None,
+        sources: tuple[str, tuple[OntologyDelta, ...]] | None = None,
     ) -> None:
         self._base = graph
+        self._sources = sources
+        """For a compiled ontology (no graph): the core Turtle and the log it holds."""
+        self._parsed: Ontology | None = None
         self._texts = texts
         self._digest = text_digest("\n".join(texts)) if texts else ""
         self._taught = taught
@@ -149,18 +123,68 @@ class Ontology(OntologyValues):
         file name) into one ontology. Raises OntologyError saying what is wrong and where."""
         if not sources:
             raise OntologyError("Ontology.load() needs at least one file or Turtle text")
-        graph = Graph()
-        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
-            graph.bind(prefix, ns)
-        texts = []
-        for source in sources:
-            _parse_into(graph, source)
-            texts.append(_read(source))
+        from wm_store.ontology._graphs import parse_sources
+        from wm_store.ontology._model import compile_graph
+
+        graph, texts = parse_sources(sources)
         decl = compile_graph(graph)
         try:
-            return cls(decl, graph, texts=tuple(texts))
+            return cls(decl, graph, texts=texts)
         except ValidationError as exc:
             raise OntologyError(f"in the ontology files: {exc}") from exc
+
+    @classmethod
+    def from_compiled(cls, data: bytes) -> Ontology:
+        """The ontology encoded by :meth:`compiled_bytes` (no rdflib): the same checks, taught
+        terms and extensions as the one encoded, without its graph. Raises OntologyError
+        when ``data`` is not a compiled ontology of this version's format."""
+        from wm_store.ontology._compiled import decode_compiled
+
+        try:
+            compiled = decode_compiled(data)
+            onto = cls(
+                compiled.declarations(),
+                None,
+                added_classes=compiled.added_classes,
+                added_templates={t.name: t for t in compiled.added_templates},
+                sources=(compiled.core, compiled.taught) if compiled.core else None,
+            )
+        except (ValueError, ValidationError) as exc:
+            raise OntologyError(f"cannot read the compiled ontology: {exc}") from None
+        onto._digest = compiled.digest
+        return onto
+
+    def compiled_bytes(
+        self,
+        core_digest: str = "",
+        *,
+        core: str = "",
+        taught: Sequence[OntologyDelta] = (),
+    ) -> bytes:
+        """This ontology compiled (msgpack of :class:`CompiledOntology`), for
+        :meth:`from_compiled`; ``core_digest``: the digest of the core it was built on
+        (default: this ontology's own). ``core`` and ``taught``: the core's Turtle and the
+        ontology log this ontology is (:func:`replay` of them), so the decoded one can rebuild
+        its graph when asked (else it has none)."""
+        from wm_store.ontology._compiled import CompiledOntology, encode_compiled
+
+        d = self._decl
+        return encode_compiled(
+            CompiledOntology(
+                classes=d.classes,
+                relations=d.relations,
+                data_properties=d.data_properties,
+                restrictions=d.restrictions,
+                templates=d.templates,
+                datatypes=d.datatypes,
+                iris=d.iris,
+                added_classes=self._added_classes,
+                added_templates=tuple(self._added_templates.values()),
+                digest=core_digest or self._digest,
+                core=core,
+                taught=tuple(taught),
+            )
+        )
 
     @classmethod
     def default(cls) -> Ontology:
@@ -176,7 +200,7 @@ class Ontology(OntologyValues):
         if not classes and not templates:
             return self
         known = dict(self._decl.classes)
-        taken = {**self._decl.iris, **{k: SKM[k] for k in TYPED_KINDS}}
+        taken = {**self._decl.iris, **{k: SKM_IRI + k for k in TYPED_KINDS}}
         for c in classes:
             what = f"cannot define class {c.name!r}"
             if not CLASS_NAME_RE.fullmatch(c.name):
@@ -216,12 +240,19 @@ class Ontology(OntologyValues):
             )
             all_templates[t.name] = added[t.name] = copy
         decl = dataclasses.replace(self._decl, classes=known, templates=all_templates)
+        sources = None
+        if self._sources is not None:  # the log of a compiled ontology grows with it
+            core, log = self._sources
+            more: list[OntologyDelta] = [ClassDefined(cls=c) for c in classes]
+            more += [TemplateDefined(template=t) for t in templates]
+            sources = (core, (*log, *more))
         return Ontology(
             decl,
             self._base,
             added_classes=self._added_classes + tuple(classes),
             added_templates=added,
             taught=self._taught,
+            sources=sources,
         )
 
     def teach(self, terms: str | Graph, *, source: str = "") -> Ontology:
@@ -230,13 +261,17 @@ class Ontology(OntologyValues):
         result must compile as a whole, and terms already present change nothing (the result
         then equals this ontology, see :meth:`same_terms`). ``source`` names the terms in
         errors. Raises OntologyError."""
+        from rdflib import Graph
+
+        from wm_store.ontology._graphs import bound_graph
+        from wm_store.ontology._teaching import parse_terms, without_known_blank_nodes
+
+        if self._base is None:
+            return self._parsed_form("teach").teach(terms, source=source)
+        own = self._base
         parsed = parse_terms(terms, source) if isinstance(terms, str) else terms
-        parsed = without_known_blank_nodes(parsed + Graph(), self._base)
-        base = Graph()
-        for prefix, ns in self._base.namespaces():
-            base.bind(prefix, ns)
-        base += self._base
-        base += parsed
+        parsed = without_known_blank_nodes(parsed + Graph(), own)
+        base = bound_graph(own, parsed)
         taught = Graph()
         if self._taught is not None:
             taught += self._taught
@@ -252,6 +287,8 @@ class Ontology(OntologyValues):
         """``base`` compiled, with the classes and templates :meth:`extend` added replayed on
         it, so an ontology taught nothing new compares equal to this one; when the new terms
         name one of those classes (or declare it again), the whole graph is compiled."""
+        from wm_store.ontology._model import compile_graph
+
         added = list(self._added_templates.values())
         try:
             plain = Ontology(compile_graph(base), base, taught=taught)
@@ -285,6 +322,8 @@ class Ontology(OntologyValues):
         graph serialized), without what :meth:`extend` or :meth:`teach` added."""
         if len(self._texts) == 1 and not self._texts[0].startswith("\0"):
             return self._texts[0]
+        if self._base is None:
+            return self._parsed_form("core_turtle").core_turtle()
         return self._base.serialize(format="turtle")
 
     def same_terms(self, other: Ontology) -> bool:
@@ -299,21 +338,45 @@ class Ontology(OntologyValues):
 
     @property
     def namespace(self) -> Namespace:
+        from wm_store.ontology._literals import SKM
+
         return SKM
+
+    @property
+    def compiled(self) -> bool:
+        """True for an ontology decoded from its compiled form (:meth:`from_compiled`): its
+        checks are those of its files; what needs its graph (:attr:`graph`, :meth:`teach`,
+        the extension's Turtle) parses its sources first (rdflib)."""
+        return self._base is None
+
+    def _parsed_form(self, what: str) -> Ontology:
+        """A compiled ontology parsed: its core Turtle and log replayed with rdflib (once), for
+        what needs the graph. OntologyError when it was compiled without them."""
+        if self._parsed is None:
+            if self._sources is None:
+                raise OntologyError(
+                    f"{what} needs the ontology's graph, and this one was decoded from a compiled "
+                    "form without its sources: load the OWL files with Ontology.load() (rdflib)"
+                )
+            from wm_store.ontology._replay import replay
+
+            core, log = self._sources
+            self._parsed = replay(Ontology.load(core), log)
+        return self._parsed
 
     @property
     def graph(self) -> Graph:
         """Files plus extensions as one rdflib graph (built on first use; read-only)."""
+        if self._base is None:
+            return self._parsed_form("graph").graph
         if self._graph is None:
+            own = self._base
             if self._added_classes or self._added_templates:
-                merged = Graph()
-                for prefix, ns in self._base.namespaces():
-                    merged.bind(prefix, ns)
-                merged += self._base
-                merged += self._extension_graph()
-                self._graph = merged
+                from wm_store.ontology._graphs import bound_graph
+
+                self._graph = bound_graph(own, self._extension_graph())
             else:
-                self._graph = self._base
+                self._graph = own
         return self._graph
 
     @property
@@ -326,39 +389,24 @@ class Ontology(OntologyValues):
         """Templates added (or replaced) by :meth:`extend`."""
         return tuple(self._added_templates.values())
 
-    def _iri(self, name: str) -> URIRef:
-        return self._decl.iris.get(name, SKM[name])
-
     def _extension_graph(self) -> Graph:
-        g = Graph()
-        g.bind("skm", SKM)
-        g.bind("owl", OWL)
-        head = URIRef(f"{ONTOLOGY_IRI}/runtime-extension")
-        g.add((head, RDF.type, OWL.Ontology))
-        g.add((head, OWL.imports, URIRef(ONTOLOGY_IRI)))
-        for c in self._added_classes:
-            iri, info = SKM[c.name], self._decl.classes[c.name]
-            g.add((iri, RDF.type, OWL.Class))
-            g.add((iri, RDFS.subClassOf, self._iri(c.parent)))
-            g.add((iri, RDFS.label, RdfLiteral(info.label, lang="en")))
-            if c.comment:
-                g.add((iri, RDFS.comment, RdfLiteral(c.comment, lang="en")))
-        for t in self._added_templates.values():
-            iri = SKM[t.name]
-            g.add((iri, RDF.type, OWL.NamedIndividual))
-            g.add((iri, RDF.type, self._iri(t.type)))
-            g.add((iri, SKM.template, RdfLiteral(True)))
-            if t.label:
-                g.add((iri, RDFS.label, RdfLiteral(t.label, lang="en")))
-            for key, value in t.properties.items():
-                g.add((iri, self._iri(key), literal_from_value(value)))
-        return g
+        from wm_store.ontology._graphs import extension_graph
+
+        return extension_graph(
+            ONTOLOGY_IRI,
+            self._added_classes,
+            self._added_templates.values(),
+            self._decl.classes,
+            self._decl.iris,
+        )
 
     def extension_graph(self) -> Graph:
         """What :meth:`teach` and :meth:`extend` added, as one graph (empty if nothing)."""
-        g = Graph()
-        for prefix, ns in (("skm", SKM), ("owl", OWL), ("rdfs", RDFS), ("xsd", XSD)):
-            g.bind(prefix, ns)
+        from wm_store.ontology._graphs import bound_graph
+
+        if self._base is None:
+            return self._parsed_form("extension_graph").extension_graph()
+        g = bound_graph()
         if self._added_classes or self._added_templates:
             g += self._extension_graph()
         if self._taught is not None:
@@ -368,6 +416,8 @@ class Ontology(OntologyValues):
     def extension_turtle(self) -> str:
         """Turtle of what :meth:`teach` and :meth:`extend` added ("" if nothing); loads with
         the core files."""
+        if self._base is None:
+            return self._parsed_form("extension_turtle").extension_turtle()
         if not (self._added_classes or self._added_templates or self._taught):
             return ""
         return self.extension_graph().serialize(format="turtle")

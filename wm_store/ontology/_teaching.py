@@ -1,41 +1,24 @@
-"""Teaching the ontology while the system runs, and replaying what was taught.
-
-The store's ontology is its core file plus an ordered list of :data:`OntologyDelta`: classes
-(:class:`ClassDefined`), templates (:class:`TemplateDefined`) and Turtle terms
-(:class:`TermsDefined`: anything an ontology file can declare). :func:`replay` rebuilds it from
-that list, the same way in the store, in every replica and after a restart, so every process of
-the mesh checks against one ontology.
+"""Teaching the ontology while the system runs: the Turtle side (rdflib). Replaying what was
+taught is :mod:`wm_store.ontology._replay`.
 
 - :func:`parse_terms` reads a Turtle text into a graph (pure; safe in a worker thread), with an
   error that names the source;
 - :func:`relation_turtle` / :func:`property_turtle` write the Turtle of one relation or data
   property, for ``skimesh wm define-relation`` / ``define-property`` and the client API;
-- :func:`core_text` / :func:`text_digest`: the core file's text and the digest a snapshot
-  carries, so a client knows whether its own core file is the store's.
+- :func:`core_text`: the core file's text.
 """
 
 from __future__ import annotations
 
-import hashlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Final
+from typing import Final
 
 from rdflib import BNode, Graph
 from rdflib.compare import isomorphic
 
 from wm_store._errors import OntologyError
 from wm_store.ontology._terms import ALL_KINDS, CLASS_NAME_RE, NAME_RE
-from wm_store.protocol import (
-    ClassDefined,
-    OntologyDelta,
-    TemplateDefined,
-    TermsDef,
-    TermsDefined,
-)
-
-if TYPE_CHECKING:
-    from wm_store.ontology._ontology import Ontology
 
 __all__ = [
     "MAX_TERMS_BYTES",
@@ -43,8 +26,6 @@ __all__ = [
     "parse_terms",
     "property_turtle",
     "relation_turtle",
-    "replay",
-    "text_digest",
     "without_known_blank_nodes",
 ]
 
@@ -65,11 +46,6 @@ _XSD_OF_KIND: Final = {
     "bool": "xsd:boolean",
     "string": "xsd:string",
 }
-
-
-def text_digest(text: str) -> str:
-    """SHA-256 (hex) of a text, as a snapshot's ``core_digest``."""
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def core_text(path: Path) -> str:
@@ -126,37 +102,6 @@ def without_known_blank_nodes(parsed: Graph, known: Graph) -> Graph:
         for triple in _subtree(parsed, node):
             parsed.remove(triple)
     return parsed
-
-
-def replay(base: Ontology, log: Iterable[OntologyDelta]) -> Ontology:
-    """``base`` with every delta of ``log`` applied in order (what the store did). Consecutive
-    taught texts are merged and compiled once: replaying a long log costs one compile per run
-    of texts, not one per text."""
-    onto = base
-    texts: list[TermsDef] = []
-
-    def flush(onto: Ontology) -> Ontology:
-        if not texts:
-            return onto
-        if len(texts) == 1:
-            merged: Graph | str = texts[0].turtle
-        else:
-            merged = Graph()
-            for terms in texts:
-                merged += parse_terms(terms.turtle, terms.source)
-        sources = ", ".join(t.source for t in texts if t.source)
-        texts.clear()
-        return onto.teach(merged, source=sources)
-
-    for delta in log:
-        match delta:
-            case TermsDefined(terms=terms):
-                texts.append(terms)
-            case ClassDefined(cls=c):
-                onto = flush(onto).extend(classes=[c])
-            case TemplateDefined(template=t):
-                onto = flush(onto).extend(templates=[t])
-    return flush(onto)
 
 
 def _check_name(name: str, what: str) -> None:

@@ -17,7 +17,7 @@ import difflib
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Final, Literal, TypeAlias
+from typing import Final, Literal, TypeAlias
 
 import msgspec
 
@@ -33,9 +33,6 @@ from wm_store.protocol import (
     TemplateDef,
     TypedValue,
 )
-
-if TYPE_CHECKING:
-    from rdflib import URIRef
 
 __all__ = [
     "ALL_KINDS",
@@ -76,6 +73,9 @@ KIND_ALIASES: Final[dict[str, frozenset[str]]] = {
 FUSABLE_KINDS: Final = frozenset({"float", "int", "Position"})
 
 NAME_RE: Final = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+SKM_IRI: Final = "https://skimesh.dev/ontology#"
+"""The skimesh namespace, as a string (:data:`~wm_store.ontology.NAMESPACE` is its rdflib
+form)."""
 CLASS_NAME_RE: Final = re.compile(r"[A-Z][A-Za-z0-9_]*")  # no '-': element ids are <Type>-<n>
 TEMPLATE_NAME_RE: Final = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
 
@@ -212,7 +212,7 @@ class Declarations:
     restrictions: tuple[CardinalityRestriction, ...]
     templates: dict[str, TemplateDef]
     datatypes: frozenset[str]
-    iris: dict[str, URIRef]
+    iris: dict[str, str]
     """The IRI of every name (names are unique across namespaces and kinds)."""
 
 

@@ -22,7 +22,6 @@ from wm_store._errors import (
     ValidationError,
 )
 from wm_store.ontology._cardinality import OntologyCardinality
-from wm_store.ontology._literals import typed_problem
 from wm_store.ontology._terms import (
     SCALAR_KINDS,
     TYPED_KINDS,
@@ -34,6 +33,7 @@ from wm_store.ontology._terms import (
     one_of,
     with_article,
 )
+from wm_store.ontology._typed import typed_problem
 from wm_store.protocol import TemplateDef, Value
 
 __all__ = ["OntologyValues"]

@@ -48,6 +48,7 @@ from ._ops import UpdateElement as UpdateElement
 from ._replies import CardinalityReply as CardinalityReply
 from ._replies import CardinalityViolation as CardinalityViolation
 from ._replies import ChangesReply as ChangesReply
+from ._replies import CompiledOntologyReply as CompiledOntologyReply
 from ._replies import ElementsReply as ElementsReply
 from ._replies import InfoReply as InfoReply
 from ._replies import OntologyReply as OntologyReply
@@ -59,6 +60,7 @@ from ._replies import TransactReply as TransactReply
 from ._requests import ChangesSince as ChangesSince
 from ._requests import CheckCardinality as CheckCardinality
 from ._requests import Comparator as Comparator
+from ._requests import GetCompiledOntology as GetCompiledOntology
 from ._requests import GetElements as GetElements
 from ._requests import GetOntology as GetOntology
 from ._requests import Info as Info
@@ -103,6 +105,7 @@ __all__ = [
     "ClassDefined",
     "Color",
     "Comparator",
+    "CompiledOntologyReply",
     "DefineClass",
     "DefineTemplate",
     "DefineTerms",
@@ -112,6 +115,7 @@ __all__ = [
     "ElementRemoved",
     "ElementsReply",
     "Frame",
+    "GetCompiledOntology",
     "GetElements",
     "GetOntology",
     "Info",

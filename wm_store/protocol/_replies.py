@@ -69,6 +69,19 @@ class OntologyReply(Struct, tag=True, tag_field="reply", kw_only=True):
     schema_version: int = SCHEMA_VERSION
 
 
+class CompiledOntologyReply(Struct, tag=True, tag_field="reply", kw_only=True):
+    """The store's ontology at ``revision``, compiled: ``compiled`` is the msgpack of a
+    ``wm_store.ontology`` compiled ontology (read it with ``Ontology.from_compiled``); it
+    holds the core (of digest ``core_digest``) and the first ``taught`` deltas of the store's
+    ontology log."""
+
+    revision: int
+    taught: int
+    core_digest: str
+    compiled: bytes
+    schema_version: int = SCHEMA_VERSION
+
+
 class ChangesReply(Struct, tag=True, tag_field="reply", kw_only=True):
     revision: int
     changes: list[Change]
@@ -124,5 +137,6 @@ Reply: TypeAlias = (
     | InfoReply
     | CardinalityReply
     | OntologyReply
+    | CompiledOntologyReply
     | ErrorReply
 )

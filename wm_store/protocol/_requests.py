@@ -98,6 +98,11 @@ class GetOntology(Struct, tag=True, tag_field="request", kw_only=True):
     process of the mesh checks against."""
 
 
+class GetCompiledOntology(Struct, tag=True, tag_field="request", kw_only=True):
+    """The store's ontology compiled (:class:`~wm_store.protocol.CompiledOntologyReply`): what
+    it checks against, core and everything taught, in a form that decodes without rdflib."""
+
+
 class CheckCardinality(Struct, tag=True, tag_field="request", kw_only=True):
     """Which elements fall short of a minimum cardinality of their class (read-only).
 
@@ -120,4 +125,5 @@ Request: TypeAlias = (
     | Info
     | CheckCardinality
     | GetOntology
+    | GetCompiledOntology
 )

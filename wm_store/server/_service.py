@@ -16,6 +16,7 @@ Codes: a :class:`~wm_store.WmError`'s own ``code``; meshlink's standard ``bad_re
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 import msgspec
 
@@ -33,7 +34,9 @@ from wm_store.protocol import (
     CardinalityReply,
     ChangesSince,
     CheckCardinality,
+    CompiledOntologyReply,
     ElementsReply,
+    GetCompiledOntology,
     GetElements,
     GetOntology,
     Info,
@@ -50,6 +53,9 @@ from wm_store.protocol import (
 from wm_store.rdf import SparqlWorker
 from wm_store.scene import match_relations, min_cardinality_violations, resolve
 from wm_store.server._store import WmStore
+
+if TYPE_CHECKING:
+    from wm_store.ontology import Ontology
 
 __all__ = ["MAX_REQUEST_BYTES", "WmService"]
 
@@ -81,6 +87,25 @@ class WmService:
         )
         self.query: RequestHandler[Request, Reply] = RequestHandler(
             Request, self._handle_read, max_request_bytes=max_request_bytes, name="wm/query"
+        )
+        self._compiled: tuple[Ontology, int, bytes] | None = None
+        """The store's ontology, the length of its log and its compiled bytes (encoded once
+        per ontology)."""
+
+    def _compiled_ontology(self) -> CompiledOntologyReply:
+        """The store's ontology compiled, with its core's Turtle and log (so a client can
+        rebuild the graph if it needs one) and how much of the log that covers."""
+        store, log = self.store, self.store.state.ontology_log
+        cached = self._compiled
+        if cached is None or cached[0] is not store.ontology or cached[1] != len(log):
+            digest, core = store.core_ontology()
+            data = store.ontology.compiled_bytes(digest, core=core, taught=log)
+            self._compiled = cached = (store.ontology, len(log), data)
+        return CompiledOntologyReply(
+            revision=store.state.revision,
+            taught=len(log),
+            core_digest=store.core_digest,
+            compiled=cached[2],
         )
 
     def _sync(self, revision: int | None) -> tuple[str, bytes, int]:
@@ -181,6 +206,8 @@ class WmService:
                 return store.info()
             case GetOntology():
                 return store.ontology_reply()
+            case GetCompiledOntology():
+                return self._compiled_ontology()
             case CheckCardinality(ids=ids):
                 checked, violations = min_cardinality_violations(state, store.ontology, ids)
                 return CardinalityReply(
