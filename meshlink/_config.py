@@ -8,11 +8,16 @@ Safe defaults, because Zenoh's own listen on every interface and scout by multic
 * clients connect to ``tcp/127.0.0.1:7447`` when no connect endpoint is given;
 * multicast scouting is off unless ``multicast_scouting`` is set (and then Zenoh's scouting
   delay is left alone; with scouting off it is 0, so a router opens without Zenoh's scouting
-  delay).
+  delay);
+* Zenoh's shared-memory transport is off unless ``shared_memory`` is set: it maps a 16 MiB
+  pool per process (up to three: 16-48 MB of every agent's memory) for messages over 3 KB,
+  which the mesh's traffic rarely has, and a process killed by a signal leaves its segments
+  in ``/dev/shm`` for good (a robot host that restarts a crashing agent for weeks fills it).
 
 A Zenoh JSON5 file (``config_file``) is loaded first; the fields of :class:`MeshConfig`
 override it. Connect and listen endpoints of the file are kept when the matching field is
-empty. ``multicast_scouting`` always wins (the file cannot tell "unset" from "true").
+empty. ``multicast_scouting`` and ``shared_memory`` always win (the file cannot tell "unset"
+from "true").
 
 Nothing here blocks (the config file is read synchronously; it is small).
 """
@@ -65,6 +70,9 @@ class MeshConfig(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_onl
     multicast_scouting: bool = False
     lease_ms: Annotated[int, msgspec.Meta(gt=0)] | None = None
     timestamping: bool = False
+    shared_memory: bool = False
+    """Zenoh's shared-memory transport between processes of one host: off by default (see
+    the module doc)."""
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -168,6 +176,7 @@ def to_zenoh_config(cfg: MeshConfig) -> zenoh.Config:
         _insert(zc, "transport/link/tx/lease", cfg.lease_ms)
     if cfg.timestamping:
         _insert(zc, "timestamping/enabled", True)
+    _insert(zc, "transport/shared_memory/enabled", cfg.shared_memory)
     return zc
 
 

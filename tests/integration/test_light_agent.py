@@ -22,7 +22,7 @@ HEAVY = ("unified_planning", "mujoco", "placo", "pinocchio", "rerun", "numpy", "
 
 RSS_LIMIT_KB = 100_000
 """The target of a simulated-outcome agent process (docs/benchmarks.md, "Light agents"): its
-resident memory without Zenoh's shared-memory segments, and its proportional set size."""
+resident memory and its proportional set size."""
 
 
 @pytest.fixture(scope="module")
@@ -84,8 +84,8 @@ def test_a_simulated_outcome_agent_is_light(store: list[str]) -> None:
         agent.kill()
     last = [line for line in agent.stderr_lines if line.startswith("loaded ")]
     assert last == ["loaded []\n"], agent.log()
-    own = memory["rss"] - memory["zenoh_shm"]  # Zenoh's segments: meshlink's configuration
-    assert own < RSS_LIMIT_KB and memory["pss"] < RSS_LIMIT_KB, memory
+    assert memory["zenoh_shm"] == 0, "meshlink turns Zenoh's shared-memory transport off"
+    assert memory["rss"] < RSS_LIMIT_KB and memory["pss"] < RSS_LIMIT_KB, memory
 
 
 @pytest.mark.parametrize("command", ["wm ls Gear", "wm tree", "wm query Gear"])

@@ -37,6 +37,7 @@ def test_defaults_are_a_loopback_client_without_multicast() -> None:
     assert get(zc, "scouting/delay") == 0
     assert get(zc, "transport/link/tx/lease") == 10000  # Zenoh's default is left alone
     assert get(zc, "timestamping/enabled") is None
+    assert get(zc, "transport/shared_memory/enabled") is False
 
 
 def test_router_listens_on_loopback_7447_by_default() -> None:
@@ -60,6 +61,7 @@ def test_fields_override_defaults() -> None:
         multicast_scouting=True,
         lease_ms=2000,
         timestamping=True,
+        shared_memory=True,
     )
     zc = to_zenoh_config(cfg)
     assert get(zc, "mode") == "peer"
@@ -69,6 +71,7 @@ def test_fields_override_defaults() -> None:
     assert get(zc, "scouting/delay") is None  # scouting on: Zenoh's delay is kept
     assert get(zc, "transport/link/tx/lease") == 2000
     assert get(zc, "timestamping/enabled") is True
+    assert get(zc, "transport/shared_memory/enabled") is True
 
 
 @pytest.mark.parametrize(
