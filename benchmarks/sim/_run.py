@@ -23,6 +23,7 @@ from benchmarks.common import (
     machine_info,
 )
 from benchmarks.sim._client import child_client
+from benchmarks.sim._fleet import child_fleet
 from benchmarks.sim._measure import measure
 from benchmarks.sim._system import LAYOUTS
 from benchmarks.sim._workload import WORKLOADS
@@ -132,7 +133,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the workload reads every sensor every S simulated seconds (0: never; default 0.5)",
     )
     hidden = argparse.SUPPRESS
-    parser.add_argument("--role", choices=("client", "router"), help=hidden)
+    parser.add_argument("--role", choices=("client", "fleet-client", "router"), help=hidden)
+    parser.add_argument("--robots", type=int, help=hidden)
     parser.add_argument("--listen", help=hidden)
     parser.add_argument("--connect", help=hidden)
     parser.add_argument("--mesh", help=hidden)
@@ -140,6 +142,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.role == "router":
         return child_router(args)
+    if args.role == "fleet-client":
+        return child_fleet(args)
     if args.role == "client":
         args.scenario = args.scenario[0]
         return child_client(args)
