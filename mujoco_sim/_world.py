@@ -64,6 +64,7 @@ from device_drivers import (
 )
 from device_drivers.protocol import Command, Pause, Resume, Stop
 from mujoco_sim._fast_run import FastRun
+from mujoco_sim._paced_run import PacedRun
 from mujoco_sim._pacing import FastPacing, Pacing, RealTimePacing
 from mujoco_sim._plant import Batch, DeviceKind, Plant
 from mujoco_sim._robot_ik import WorldIK
@@ -96,6 +97,10 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     """Fast mode: longest wall time, s, of one thread call running batches back to back (see
     the module doc); 0: one batch per call, finished jobs handed over at its end."""
     slip: Annotated[float, Meta(gt=0)] = 0.25
+    handover: Annotated[float, Meta(ge=0, le=10)] = 1.0
+    """Real time: longest wall time, s, of one thread call running batches on the wall clock
+    by itself (a *paced run*, :mod:`mujoco_sim._paced_run`): the longest the event loop may be
+    busy without holding the physics back; 0: every batch is handed through the event loop."""
     grasp: GraspMode = "weld"
     seed: int = 0
     max_acceleration: Annotated[float, Meta(gt=0)] = 1e6
@@ -192,6 +197,17 @@ class SimWorld:
             )
         )
         run = self._fast.batch_runner(fast=o.fast, fast_handover=o.fast_handover)
+        if isinstance(pacing, RealTimePacing) and o.handover > 0:
+            self._fast.attach()
+            run = PacedRun(
+                plant,
+                self._on_loop,
+                self._in_thread,
+                hand=self._fast,
+                pacing=pacing,
+                budget=o.handover,
+                progress=self._report_progress,
+            )
         task_status.started()
         try:
             while self._on_loop.failure is None:
@@ -235,6 +251,10 @@ class SimWorld:
             self._forget(job)
             job.done.set()
         self._ring(batch.snapshot.time)
+        self._report_progress()
+
+    def _report_progress(self) -> None:
+        """Loop: call the progress callbacks of the waiting jobs whose progress changed."""
         for job in self._on_loop.waiting:
             if job.on_progress is not None and job.progress != job.reported:
                 job.reported = job.progress
