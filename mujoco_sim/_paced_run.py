@@ -16,9 +16,13 @@ core. A *paced run* is one thread call that runs batches on the wall clock by it
   tick (:meth:`~mujoco_sim._fast_run.FastRun.report`); unlike a fast run, the simulation does
   not wait for the loop to take them: real time does not wait for anyone. Other batch ends are
   only published by reference (:attr:`SimWorld.snapshot` reads the newest);
-- progress of running commands is posted once per batch while some command reports it, and
-  never twice before the loop has taken the last one (a slow loop gets the newest values, not
-  a backlog).
+- a snapshot of the world is published every ``publish`` simulated seconds (40 ms, the rate
+  at which the device server publishes states), not every tick: the device states of a
+  fleet cost about a millisecond a snapshot. A finished job or a due alarm always comes with
+  a snapshot of its own tick, and the run ends with a fresh one;
+- progress of running commands is posted at most every ``publish`` s while some command
+  reports it, and never twice before the loop has taken the last one (a slow loop gets the
+  newest values, not a backlog).
 
 The run returns to the loop when the world turns quiet (nothing moves by command, nothing
 queued, no alarm near: the loop's pacing then sleeps until a whole batch is due or news comes),
@@ -28,6 +32,7 @@ when a :meth:`SimWorld.call` waits for the model, when the world is being stoppe
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -55,6 +60,7 @@ class PacedRun:
         hand: FastRun,
         pacing: RealTimePacing,
         budget: float,
+        publish: float,
         progress: Callable[[], None],
     ) -> None:
         self._plant = plant
@@ -63,6 +69,8 @@ class PacedRun:
         self._hand = hand
         self._pacing = pacing
         self._budget = budget
+        self._publish = publish
+        self._published = -math.inf  # simulated time of the last snapshot or progress post
         self._progress = progress
         self._progress_posted = False  # a progress post the loop has not taken yet
 
@@ -72,20 +80,29 @@ class PacedRun:
         deadline = time.perf_counter() + self._budget
         total = 0
         while True:
-            self._in_thread.batch_ticks = self._in_thread.ticks_left = ticks
-            batch = plant.run_batch(ticks, jobs, report=hand.report, wake=hand.wake)
+            end = plant.time + ticks * plant.tick_time
+            publish = end - self._published >= self._publish - 1e-9
+            # unpublished batch ends leave the alarms to wake(), on every tick
+            self._in_thread.batch_ticks = ticks
+            self._in_thread.ticks_left = ticks + (0 if publish else 1)
+            plant.run_batch(ticks, jobs, report=hand.report, wake=hand.wake, publish=publish)
             total += ticks
             self._in_thread.acks.clear()  # nothing waits for the loop in real time
-            if self._on_loop.reporting > 0 and not self._progress_posted:
-                self._progress_posted = True
-                hand.post(self._report_progress)
+            if publish:
+                self._published = plant.time
+                if self._on_loop.reporting > 0 and not self._progress_posted:
+                    self._progress_posted = True
+                    hand.post(self._report_progress)
             if time.perf_counter() >= deadline or self._must_return():
                 break
-            ticks = self._pacing.wait_in_thread(float(plant.data.time))
+            ticks = self._pacing.wait_in_thread(plant.time)
             if ticks < 1:
                 break
             jobs = [inbox.popleft() for _ in range(len(inbox))]
-        return Batch([], batch.snapshot, total)
+        snapshot = plant.snapshot
+        if snapshot.time < plant.time:  # the loop's pacing goes on from the present tick
+            snapshot = self._in_thread.latest = plant.take_snapshot()
+        return Batch([], snapshot, total)
 
     def _must_return(self) -> bool:
         """Between batches: the world is being stopped, a call waits for the model, or

@@ -101,6 +101,9 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     """Real time: longest wall time, s, of one thread call running batches on the wall clock
     by itself (a *paced run*, :mod:`mujoco_sim._paced_run`): the longest the event loop may be
     busy without holding the physics back; 0: every batch is handed through the event loop."""
+    publish: Annotated[float, Meta(gt=0, le=1)] = 0.04
+    """Real time, paced runs: simulated seconds between the snapshots (and progress reports)
+    published while nothing else happens; finished jobs and alarms bring their own."""
     grasp: GraspMode = "weld"
     seed: int = 0
     max_acceleration: Annotated[float, Meta(gt=0)] = 1e6
@@ -206,6 +209,7 @@ class SimWorld:
                 hand=self._fast,
                 pacing=pacing,
                 budget=o.handover,
+                publish=o.publish,
                 progress=self._report_progress,
             )
         task_status.started()

@@ -23,7 +23,7 @@ from benchmarks.common import (
     machine_info,
 )
 from benchmarks.sim._client import child_client
-from benchmarks.sim._fleet import child_fleet
+from benchmarks.sim._fleet import child_fleet, measure_fleet
 from benchmarks.sim._measure import measure
 from benchmarks.sim._system import LAYOUTS
 from benchmarks.sim._workload import WORKLOADS
@@ -94,6 +94,46 @@ def make_rows(results: dict[str, dict[str, Any]]) -> list[Row]:
     return rows
 
 
+def fleet_rows(fleet: dict[str, Any]) -> list[Row]:
+    """The fleet case: the worst round of each case (real time is judged by its worst)."""
+
+    def worst(case: str) -> dict[str, Any]:
+        return min(fleet["runs"][case], key=lambda r: (r["real_time_factor"], -r["slips"]))
+
+    big, small, ablation = worst("fleet"), worst("small"), worst("per-batch")
+    n, rounds = fleet["robots"], len(fleet["runs"]["fleet"])
+    note = f"worst of {rounds}; {fleet['seconds']:.0f} s windows"
+    return [
+        Row(
+            figure=f"fleet: {n} robots driving, real-time factor (slips: {big['slips']})",
+            value=big["real_time_factor"],
+            unit="x",
+            baseline=f"{small['robots']} robots driving (slips: {small['slips']})",
+            baseline_value=small["real_time_factor"],
+            target=">= 0.98, no slip",
+            met=big["real_time_factor"] >= 0.98 and big["slips"] == 0,
+            note=note,
+        ),
+        Row(
+            figure=f"fleet: {n} robots driving, every batch handed through the loop "
+            f"(slips: {ablation['slips']})",
+            value=ablation["real_time_factor"],
+            unit="x",
+            baseline=f"{n} robots, paced run",
+            baseline_value=big["real_time_factor"],
+            note=f"ablation, handover 0; {note}",
+        ),
+        Row(
+            figure=f"fleet: {n} robots driving, CPU of the simulator's process, % of a core",
+            value=100 * big["cpu"],
+            unit="%",
+            baseline=f"{small['robots']} robots",
+            baseline_value=100 * small["cpu"],
+            note=f"handover 0: {100 * ablation['cpu']:.0f} %",
+        ),
+    ]
+
+
 def print_details(results: dict[str, dict[str, Any]]) -> None:
     for name, r in results.items():
         halts = ", ".join(f"{1e3 * h:.0f}" for h in r["stop_to_halt_s"])
@@ -126,6 +166,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--in-process", action="store_true", help="the single-process layout only")
     parser.add_argument(
+        "--fleet",
+        type=int,
+        default=40,
+        metavar="N",
+        help="the fleet case: N robots driving at once in real time (default 40; 0: skip)",
+    )
+    parser.add_argument("--fleet-only", action="store_true", help="only the fleet case")
+    parser.add_argument(
         "--sensor-period",
         type=float,
         default=0.5,
@@ -154,12 +202,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     started = time.perf_counter()
     results: dict[str, dict[str, Any]] = {}
     with tempfile.TemporaryDirectory(prefix="skimesh-bench-sim-") as tmp:
-        for name in args.scenario or sorted(WORKLOADS):
+        for name in [] if args.fleet_only else args.scenario or sorted(WORKLOADS):
             print(f"{name}: measuring...", file=sys.stderr, flush=True)
             run = partial(measure, period=args.sensor_period)
             results[name] = anyio.run(run, name, args.quick, repeat, layouts, Path(tmp))
+        fleet: dict[str, Any] | None = None
+        if args.fleet > 0:
+            print(f"fleet of {args.fleet}: measuring...", file=sys.stderr, flush=True)
+            seconds, rounds = (5.0, 1) if args.quick else (20.0, 2)
+            fleet = anyio.run(measure_fleet, args.fleet, seconds, rounds, Path(tmp))
     conditions |= {"load_end": load_average(), "calibration_ms_end": calibrate()}
-    rows = make_rows(results)
+    rows = make_rows(results) + (fleet_rows(fleet) if fleet else [])
     print("machine: " + ", ".join(f"{k} {v}" for k, v in info.items()))
     print(
         f"run: {'quick' if args.quick else 'full'}, {time.perf_counter() - started:.0f} s; load "
@@ -169,5 +222,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     print_details(results)
     if args.json is not None:
         doc = {"machine": info, "conditions": conditions, "rows": rows, "results": results}
+        doc["fleet"] = fleet
         args.json.write_bytes(msgspec.json.format(msgspec.json.encode(doc)))
     return 0 if all(row.met is not False for row in rows) else 1
