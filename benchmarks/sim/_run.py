@@ -220,6 +220,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     print(format_table(rows))
     print_details(results)
+    for case, runs in (fleet or {}).get("runs", {}).items():
+        found = ", ".join(
+            f"{r['real_time_factor']:.3f} ({r['slips']} slips, CPU {100 * r['cpu']:.0f} %)"
+            for r in runs
+        )
+        print(f"fleet, {case} ({runs[0]['robots']} robots): real-time factor {found}")
     if args.json is not None:
         doc = {"machine": info, "conditions": conditions, "rows": rows, "results": results}
         doc["fleet"] = fleet
