@@ -1,11 +1,10 @@
 """How a :class:`~mujoco_sim.SimWorld` in real time keeps the wall clock in its own thread.
 
-While something moves, a real-time world runs a tick every 10 ms. Handing each tick through
-the event loop (the loop sleeps until it is due, hands it to a worker thread, takes the result
-back) puts three thread wake-ups and the loop's own work on every tick's path: on a busy loop
-(the device server of a fleet: 100-200 devices' states and commands) or a loaded machine they
-add up to more than the tick, and the simulation falls behind while it uses under half a
-core. A *paced run* is one thread call that runs batches on the wall clock by itself:
+While something moves, a real-time world runs a tick every 10 ms. Handed through the event
+loop, each tick waits for the loop (it sleeps until the tick is due, hands it to a worker
+thread and takes the result back), so a loop busy for longer than a tick holds the physics
+back. A *paced run* (``WorldOptions.handover`` > 0) is one thread call that runs batches on
+the wall clock by itself:
 
 - between batches the simulation thread waits (``time.sleep``) until the next tick is due, or
   runs the ticks already due at once (up to ``max_ticks`` per batch), the same catch-up and

@@ -97,10 +97,12 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     """Fast mode: longest wall time, s, of one thread call running batches back to back (see
     the module doc); 0: one batch per call, finished jobs handed over at its end."""
     slip: Annotated[float, Meta(gt=0)] = 0.25
-    handover: Annotated[float, Meta(ge=0, le=10)] = 1.0
-    """Real time: longest wall time, s, of one thread call running batches on the wall clock
-    by itself (a *paced run*, :mod:`mujoco_sim._paced_run`): the longest the event loop may be
-    busy without holding the physics back; 0: every batch is handed through the event loop."""
+    handover: Annotated[float, Meta(ge=0, le=10)] = 0.0
+    """Real time: > 0 runs batches on the wall clock in the simulation thread for up to this
+    many wall seconds per thread call (a *paced run*, :mod:`mujoco_sim._paced_run`: the
+    physics keeps time while the event loop is busy, at ~20 % less CPU); 0 (default): every
+    batch is handed through the event loop, which measured steadier on a loaded machine
+    (docs/benchmarks.md, "Real-time physics at 40 robots")."""
     publish: Annotated[float, Meta(gt=0, le=1)] = 0.04
     """Real time, paced runs: simulated seconds between the snapshots (and progress reports)
     published while nothing else happens; finished jobs and alarms bring their own."""

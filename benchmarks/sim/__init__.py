@@ -34,8 +34,8 @@ Per scenario (run times, method and results: ``docs/benchmarks.md``, section "Si
    mobile manipulators, each with a kitting cell of its own, every base driving out and back
    at once through the remote proxies from a client process, the world in real time recorded
    with rerun: real-time factor and slips beside a fleet of 4 in the same run (target: >= 0.98,
-   no slip), and N robots with every batch handed through the event loop (``handover`` 0) as
-   the ablation.
+   no slip), and N robots in paced runs (``WorldOptions.handover`` 1 s: the simulation thread
+   keeps the clock) beside them.
 
 Child processes (client, fleet client, router) are ``sys.executable`` children of this script
 (``--role``), on 127.0.0.1 only (free port, multicast scouting off), always stopped by their

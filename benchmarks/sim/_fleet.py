@@ -197,13 +197,14 @@ SMALL = 4  # robots of the baseline fleet
 
 async def measure_fleet(n: int, seconds: float, repeat: int, workdir: Path) -> dict[str, Any]:
     """The fleet case, ``repeat`` rounds (the cases take turns going first): ``n`` robots
-    driving with the default pacing (a paced run), the small fleet of :data:`SMALL` robots
-    (the baseline), and ``n`` robots with every batch handed through the event loop
-    (``handover`` 0: the ablation). Each recorded with rerun, as ``skimesh sim`` does."""
+    driving with the default pacing (every batch handed through the event loop), the small
+    fleet of :data:`SMALL` robots (the baseline), and ``n`` robots in paced runs (``handover``
+    1 s: the simulation thread keeps the clock, :mod:`mujoco_sim._paced_run`). Each recorded
+    with rerun, as ``skimesh sim`` does."""
     cases = {
         "fleet": (n, WorldOptions()),
         "small": (SMALL, WorldOptions()),
-        "per-batch": (n, WorldOptions(handover=0.0)),
+        "paced": (n, WorldOptions(handover=1.0)),
     }
     runs: dict[str, list[dict[str, Any]]] = {case: [] for case in cases}
     names = list(cases)

@@ -1,7 +1,7 @@
-"""Real time with a paced run (``mujoco_sim._paced_run``): while something moves, the
-simulation thread keeps the wall clock by itself, a thread call runs many ticks, a busy event
-loop does not hold the physics back, and commands, progress, alarms, calls and stops still
-come through at tick boundaries."""
+"""Real time with a paced run (``mujoco_sim._paced_run``, ``WorldOptions.handover`` > 0):
+while something moves, the simulation thread keeps the wall clock by itself, a thread call
+runs many ticks, a busy event loop does not hold the physics back, and commands, progress,
+alarms, calls and stops still come through at tick boundaries."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from scenario import load_scenario
 pytestmark = [pytest.mark.sim, pytest.mark.anyio]
 
 MEAL = Path(__file__).resolve().parents[3] / "configs" / "scenarios" / "meal" / "scenario.toml"
-TICK = 0.01
+PACED = WorldOptions(handover=1.0)
 
 
 def friend_arm(world: SimWorld) -> SimArm:
@@ -30,7 +30,7 @@ def friend_arm(world: SimWorld) -> SimArm:
 
 
 async def test_a_moving_world_hands_many_ticks_over_per_thread_call() -> None:
-    async with running_world(load_scenario(MEAL), WorldOptions()) as world:
+    async with running_world(load_scenario(MEAL), PACED) as world:
         arm = friend_arm(world)
         await anyio.sleep(0.1)
         before = world.statistics()
@@ -47,7 +47,7 @@ async def test_a_moving_world_hands_many_ticks_over_per_thread_call() -> None:
 async def test_the_physics_keeps_the_clock_while_the_event_loop_is_blocked() -> None:
     """A loop busy for 0.3 s (a fleet's device server, a long callback) does not stop the
     clock: the ticks due meanwhile run in the simulation thread, and nothing slips."""
-    async with running_world(load_scenario(MEAL), WorldOptions()) as world:
+    async with running_world(load_scenario(MEAL), PACED) as world:
         arm = friend_arm(world)
         async with anyio.create_task_group() as tg:
             tg.start_soon(partial(arm.move_joints, {"elbow": 1.2}, duration=1.5))
@@ -60,7 +60,7 @@ async def test_the_physics_keeps_the_clock_while_the_event_loop_is_blocked() -> 
 
 
 async def test_a_command_given_during_a_paced_run_starts_within_a_batch() -> None:
-    async with running_world(load_scenario(MEAL), WorldOptions()) as world:
+    async with running_world(load_scenario(MEAL), PACED) as world:
         arm = friend_arm(world)
         oven = world.plant.controllers[("Microwave-1", "appliance")]
         async with anyio.create_task_group() as tg:
@@ -71,7 +71,7 @@ async def test_a_command_given_during_a_paced_run_starts_within_a_batch() -> Non
             assert isinstance(door, SimAppliance)
             await door.set_door(True)
             started = oven.started_at
-        assert 0.0 <= started - issued <= WorldOptions().batch + 1e-9
+        assert 0.0 <= started - issued <= PACED.batch + 1e-9
 
 
 async def _until_stopped(arm: SimArm) -> None:
@@ -80,13 +80,13 @@ async def _until_stopped(arm: SimArm) -> None:
 
 
 async def test_alarms_calls_and_stops_come_through_a_paced_run() -> None:
-    async with running_world(load_scenario(MEAL), WorldOptions()) as world:
+    async with running_world(load_scenario(MEAL), PACED) as world:
         arm = friend_arm(world)
         async with anyio.create_task_group() as tg:
             tg.start_soon(_until_stopped, arm)
             start = world.snapshot.time
             await world.sleep(0.25)
-            assert 0.25 - 1e-9 <= world.snapshot.time - start <= 0.25 + WorldOptions().batch
+            assert 0.25 - 1e-9 <= world.snapshot.time - start <= 0.25 + PACED.batch
             wall = time.perf_counter()
             now = await world.call(lambda _model, data: float(data.time))
             assert now >= start + 0.25 and time.perf_counter() - wall < 0.5
@@ -97,10 +97,11 @@ async def test_alarms_calls_and_stops_come_through_a_paced_run() -> None:
 
 async def test_stopping_the_world_ends_a_paced_run_at_the_next_batch() -> None:
     async with anyio.create_task_group() as tg:
-        async with running_world(load_scenario(MEAL), WorldOptions()) as world:
+        long = WorldOptions(handover=5.0)  # a run that would last 5 s unless stopped
+        async with running_world(load_scenario(MEAL), long) as world:
             tg.start_soon(_until_stopped, friend_arm(world))
             await world.sleep(0.2)  # moving: a paced run is under way
             wall = time.perf_counter()
         stopped = time.perf_counter() - wall
-    assert stopped < WorldOptions().handover + 0.5  # (a paced run lasts a hand-over at most)
+    assert stopped < 1.0  # at the next batch boundary, not at the end of the run
     assert isinstance(world.failure, DeviceUnavailableError)  # "the simulation was stopped"
