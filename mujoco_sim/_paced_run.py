@@ -101,7 +101,7 @@ class PacedRun:
         snapshot = plant.snapshot
         if snapshot.time < plant.time:  # the loop's pacing goes on from the present tick
             snapshot = self._in_thread.latest = plant.take_snapshot()
-        return Batch([], snapshot, total)
+        return Batch([], snapshot, total, plant.time)
 
     def _must_return(self) -> bool:
         """Between batches: the world is being stopped, a call waits for the model, or

@@ -52,6 +52,8 @@ class Batch:
     finished: list[Job]
     snapshot: Snapshot
     ticks: int
+    time: float
+    """The simulation time at the batch's end (the snapshot may be older: see ``publish``)."""
 
 
 class Plant:
@@ -177,9 +179,9 @@ class Plant:
         the starts of a batch for commands answered at once, after the tick that finished the
         others), the state checked and a snapshot taken at that moment; ``report([],
         snapshot)`` comes after every tick at whose end ``wake(time)`` is true; and every batch
-        ends with a report (of the jobs it finished last, if any) and its snapshot; with
-        ``publish`` false, only if it finished jobs (a paced run in real time publishes a
-        snapshot every few ticks: :mod:`mujoco_sim._paced_run`).
+        ends with a report (of the jobs it finished last, if any) and its snapshot. With
+        ``publish`` false a batch takes a snapshot only if it finished jobs (real time
+        publishes one every few ticks: ``WorldOptions.publish``).
 
         Raises:
             SimulationDivergedError: the state diverged during the batch.
@@ -194,9 +196,9 @@ class Plant:
                 queued = [inbox.popleft() for _ in range(len(inbox))]
                 finished = self._run_ticks(ticks, queued, report, wake, within=True)
                 total += ticks
-        if report is None:  # (else the last batch took it)
+        if report is None and (publish or finished):  # (with a report, the last batch took it)
             self.snapshot = self._snapshot()
-        return Batch(finished, self.snapshot, total)
+        return Batch(finished, self.snapshot, total, self.time)
 
     def _run_ticks(
         self,

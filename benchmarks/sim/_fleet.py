@@ -28,6 +28,7 @@ from meshlink.testing import running_router
 from mujoco_sim import SimWorld, WorldOptions, sim_devices
 from mujoco_sim.recording import Recorder
 from scenario import Scenario, parse_scenario
+from skimesh.runtime import settle_heap
 
 __all__ = ["child_fleet", "fleet_real_time", "fleet_scenario"]
 
@@ -161,6 +162,7 @@ async def fleet_real_time(
             ["-m", "benchmarks.sim", "--role", "fleet-client", *args], name="fleet"
         ) as child:
             world = await SimWorld.create(scenario, options or WorldOptions(), recorder)
+            settle_heap()  # as `skimesh sim` does once its world is built
             await child.expect_async("ready", timeout=60)
             config = MeshConfig(connect=(endpoint,), mesh=mesh)
             async with open_mesh(config) as server, anyio.create_task_group() as tg:
