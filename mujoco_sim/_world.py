@@ -101,8 +101,8 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     handover: Annotated[float, Meta(ge=0, le=10)] = 0.0
     """Real time: > 0 runs batches on the wall clock in the simulation thread for up to this
     many wall seconds per thread call (a *paced run*, :mod:`mujoco_sim._paced_run`: the
-    physics keeps time while the event loop is busy, at 15-20 % less CPU); 0 (default): every
-    batch is handed through the event loop, which measured steadier on a loaded machine
+    physics keeps time while the event loop is blocked); 0 (default): every batch is handed
+    through the event loop, which slipped no more often on a loaded machine
     (docs/benchmarks.md, "Real-time physics at 40 robots")."""
     publish: Annotated[float, Meta(gt=0, le=1)] = 0.04
     """Real time: simulated seconds between the snapshots (and, in paced runs, progress
