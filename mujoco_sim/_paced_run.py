@@ -104,8 +104,8 @@ class PacedRun:
         return Batch([], snapshot, total, plant.time)
 
     def _must_return(self) -> bool:
-        """Between batches: the world is being stopped, a call waits for the model, or
-        nothing is left to pace (the loop's pacing takes a quiet world)."""
+        """Between batches: whether the world is being stopped or a call waits for the model
+        (a quiet world is told by :meth:`RealTimePacing.wait_in_thread`)."""
         try:
             anyio.from_thread.check_cancelled()
         except BaseException as exc:  # the backend's cancellation exception
