@@ -82,16 +82,29 @@ class FastRun:
         plant = self._plant
         if not (fast and fast_handover > 0):
             return plant.run_batch
-        self._loop = asyncio.get_running_loop()
-        self._post = loop_post(self._loop)
+        self.attach()
         return partial(
             plant.run_batch,
             inbox=self._on_loop.inbox,
             until=self._between_batches,
             budget=fast_handover,
             report=self.report,
-            wake=self._wake,
+            wake=self.wake,
         )
+
+    def attach(self) -> None:
+        """Loop: post to the running loop from now on (a fast run, or a paced run in real
+        time: :mod:`mujoco_sim._paced_run`)."""
+        self._loop = asyncio.get_running_loop()
+        self._post = loop_post(self._loop)
+
+    def post(self, fn: Callable[[], object]) -> None:
+        """Simulation thread: run ``fn()`` on the loop soon, in order with the reports."""
+        assert self._loop is not None
+        if self._post is not None:
+            self._post.post(fn)
+        else:
+            self._loop.call_soon_threadsafe(fn)
 
     def begin(self, ticks: int) -> None:
         """Loop, before each thread call, of batches of ``ticks``: forget the last call's
@@ -104,7 +117,7 @@ class FastRun:
         """Simulation thread, between the batches of a fast run: wait until the loop has
         dealt with what was reported during the last batch, then say whether the run must
         return: a job reports progress, a :meth:`SimWorld.call` waits, or the world is being
-        stopped (a due alarm does not end it: it is reported, see :meth:`_wake`)."""
+        stopped (a due alarm does not end it: it is reported, see :meth:`wake`)."""
         for ack in self._in_thread.acks:
             if not ack.wait(_ACK_WAIT):
                 _log.warning("the event loop took over %g s to take a batch", _ACK_WAIT)
@@ -121,7 +134,7 @@ class FastRun:
         self._in_thread.ticks_left = self._in_thread.batch_ticks
         return False
 
-    def _wake(self, sim_time: float) -> bool:
+    def wake(self, sim_time: float) -> bool:
         """Simulation thread, after each tick of a fast run: whether an alarm not yet reported
         is due (then the plant reports, and :meth:`deliver` rings it). Not after the last
         tick of a batch: the batch's own report, with its snapshot of that very tick, comes

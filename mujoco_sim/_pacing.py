@@ -47,7 +47,8 @@ class RealTimePacing:
     *quiet* world (nothing moves by command, nothing queued or waiting for the model, no alarm
     near) sleeps until a whole batch is due or until news (:attr:`LoopState.news`) wakes it;
     it then first runs the ticks due by then without the jobs (a catch-up batch), so that the
-    news starts at the present tick."""
+    news starts at the present tick. The clock is shared with the simulation thread during a
+    paced run (:meth:`wait_in_thread`), never at the same time as the loop uses it."""
 
     def __init__(
         self,
@@ -71,13 +72,10 @@ class RealTimePacing:
     async def next_batch(self) -> tuple[int, bool]:
         tick, max_ticks = self._plant.tick_time, self.max_ticks
         while True:
-            behind = (time.perf_counter() - self._wall0) - (self._sim_time() - self._sim0)
-            if behind > self._slip:
-                self._state.slips += 1
-                self._wall0 += behind - tick
-                behind = tick
+            now = self._sim_time()
+            behind = self._behind(now)
             ticks = min(max_ticks, math.floor(behind / tick + 1e-9))
-            quiet = self._quiet(max_ticks * tick)
+            quiet = self._quiet(max_ticks * tick, now)
             if ticks < 1 or (quiet and ticks < max_ticks):
                 self._catch_up = await self._pause((max_ticks if quiet else 1), behind, quiet)
                 continue
@@ -85,11 +83,35 @@ class RealTimePacing:
             self._catch_up = False
             return ticks, take_jobs
 
-    def _quiet(self, horizon: float) -> bool:
-        """Between batches (the model is the loop's): nothing moves by command, nothing is
-        queued or waits for the model, and no alarm is due within ``horizon`` s."""
+    def wait_in_thread(self, sim_time: float) -> int:
+        """Simulation thread, between the batches of a paced run (:mod:`mujoco_sim.
+        _paced_run`), the simulation at ``sim_time``: wait until a tick is due and return the
+        ticks due (up to ``max_ticks``), or 0 once the world is quiet (:meth:`next_batch`
+        then paces it on the loop)."""
+        tick, max_ticks = self._plant.tick_time, self.max_ticks
+        while not self._quiet(max_ticks * tick, sim_time):
+            behind = self._behind(sim_time)
+            ticks = min(max_ticks, math.floor(behind / tick + 1e-9))
+            if ticks >= 1:
+                return ticks
+            time.sleep(tick - behind)
+        return 0
+
+    def _behind(self, sim_time: float) -> float:
+        """Wall seconds the simulation at ``sim_time`` is behind the clock; more than
+        ``slip`` counts a slip and moves the clock (it gives up catching up)."""
+        behind = (time.perf_counter() - self._wall0) - (sim_time - self._sim0)
+        if behind > self._slip:
+            self._state.slips += 1
+            self._wall0 += behind - self._plant.tick_time
+            behind = self._plant.tick_time
+        return behind
+
+    def _quiet(self, horizon: float, sim_time: float) -> bool:
+        """Between batches (the model is not being stepped): nothing moves by command,
+        nothing is queued or waits for the model, and no alarm is due within ``horizon`` s."""
         s = self._state
-        if s.inbox or s.calls or s.next_alarm - self._sim_time() <= horizon:
+        if s.inbox or s.calls or s.next_alarm - sim_time <= horizon:
             return False
         return not any(ctrl.active for ctrl in self._plant.controllers.values())
 

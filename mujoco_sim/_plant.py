@@ -52,6 +52,8 @@ class Batch:
     finished: list[Job]
     snapshot: Snapshot
     ticks: int
+    time: float
+    """The simulation time at the batch's end (the snapshot may be older: see ``publish``)."""
 
 
 class Plant:
@@ -164,6 +166,7 @@ class Plant:
         budget: float = 0.0,
         report: Callable[[list[Job], Snapshot], None] | None = None,
         wake: Callable[[float], bool] | None = None,
+        publish: bool = True,
     ) -> Batch:
         """Start ``jobs``, run ``ticks`` control ticks, check and snapshot (see module doc).
 
@@ -176,12 +179,14 @@ class Plant:
         the starts of a batch for commands answered at once, after the tick that finished the
         others), the state checked and a snapshot taken at that moment; ``report([],
         snapshot)`` comes after every tick at whose end ``wake(time)`` is true; and every batch
-        ends with a report (of the jobs it finished last, if any) and its snapshot.
+        ends with a report (of the jobs it finished last, if any) and its snapshot. With
+        ``publish`` false a batch takes a snapshot only if it finished jobs (real time
+        publishes one every few ticks: ``WorldOptions.publish``).
 
         Raises:
             SimulationDivergedError: the state diverged during the batch.
         """
-        finished = self._run_ticks(ticks, jobs, report, wake)
+        finished = self._run_ticks(ticks, jobs, report, wake, publish=publish)
         total = ticks
         if inbox is not None:
             deadline = perf_counter() + budget
@@ -191,9 +196,9 @@ class Plant:
                 queued = [inbox.popleft() for _ in range(len(inbox))]
                 finished = self._run_ticks(ticks, queued, report, wake, within=True)
                 total += ticks
-        if report is None:  # (else the last batch took it)
+        if report is None and (publish or finished):  # (with a report, the last batch took it)
             self.snapshot = self._snapshot()
-        return Batch(finished, self.snapshot, total)
+        return Batch(finished, self.snapshot, total, self.time)
 
     def _run_ticks(
         self,
@@ -203,6 +208,7 @@ class Plant:
         wake: Callable[[float], bool] | None = None,
         *,
         within: bool = False,
+        publish: bool = True,
     ) -> list[Job]:
         """One batch without the final snapshot: start ``jobs``, tick, step, sample, check;
         return the jobs that finished (none with ``report``: see :meth:`run_batch`). Per tick
@@ -254,9 +260,15 @@ class Plant:
         finished = cancelled + self._collect(controllers)
         if report is None:
             return finished
-        self.snapshot = self._snapshot()  # every batch ends with a snapshot for the loop
-        report(finished, self.snapshot)
+        if finished or publish:
+            self.snapshot = self._snapshot()  # a batch ends with a snapshot for the loop
+            report(finished, self.snapshot)
         return []
+
+    def take_snapshot(self) -> Snapshot:
+        """Take a snapshot of the world now and keep it as the latest."""
+        self.snapshot = self._snapshot()
+        return self.snapshot
 
     def _collect(self, controllers: list[Controller]) -> list[Job]:
         """Take the jobs ``controllers`` finished (their outcomes logged)."""

@@ -36,7 +36,9 @@ class LoopState:
         "inbox",
         "news",
         "next_alarm",
+        "published",
         "reporting",
+        "sim_time",
         "slips",
         "snapshot",
         "stopped",
@@ -48,6 +50,8 @@ class LoopState:
         self.inbox: deque[Job] = deque()  # taken by each batch (by the thread in a fast run)
         self.waiting: set[Job] = set()
         self.snapshot = snapshot  # the last one delivered
+        self.sim_time = snapshot.time  # the simulation's time at the last batch end delivered
+        self.published = snapshot.time  # real time: when the last batch snapshot was taken
         self.failure: BaseException | None = None
         self.stopped = anyio.Event()
         self.news = anyio.Event()  # real time: wakes a quiet world (see RealTimePacing)

@@ -48,6 +48,7 @@ import math
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from functools import partial
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import anyio
@@ -64,6 +65,7 @@ from device_drivers import (
 )
 from device_drivers.protocol import Command, Pause, Resume, Stop
 from mujoco_sim._fast_run import FastRun
+from mujoco_sim._paced_run import PacedRun
 from mujoco_sim._pacing import FastPacing, Pacing, RealTimePacing
 from mujoco_sim._plant import Batch, DeviceKind, Plant
 from mujoco_sim._robot_ik import WorldIK
@@ -96,6 +98,16 @@ class WorldOptions(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True
     """Fast mode: longest wall time, s, of one thread call running batches back to back (see
     the module doc); 0: one batch per call, finished jobs handed over at its end."""
     slip: Annotated[float, Meta(gt=0)] = 0.25
+    handover: Annotated[float, Meta(ge=0, le=10)] = 0.0
+    """Real time: > 0 runs batches on the wall clock in the simulation thread for up to this
+    many wall seconds per thread call (a *paced run*, :mod:`mujoco_sim._paced_run`: the
+    physics keeps time while the event loop is blocked); 0 (default): every batch is handed
+    through the event loop, which slipped no more often on a loaded machine
+    (docs/benchmarks.md, "Real-time physics at 40 robots")."""
+    publish: Annotated[float, Meta(gt=0, le=1)] = 0.04
+    """Real time: simulated seconds between the snapshots (and, in paced runs, progress
+    reports) published while nothing else happens (a snapshot of 160 devices' states costs
+    ~1 ms); finished jobs and due alarms bring their own."""
     grasp: GraspMode = "weld"
     seed: int = 0
     max_acceleration: Annotated[float, Meta(gt=0)] = 1e6
@@ -185,13 +197,26 @@ class SimWorld:
             else RealTimePacing(
                 plant,
                 self._on_loop,
-                lambda: self.snapshot.time,
+                lambda: max(self._on_loop.sim_time, self.snapshot.time),
                 max_ticks=max_ticks,
                 slip=o.slip,
                 wall0=wall0,
             )
         )
         run = self._fast.batch_runner(fast=o.fast, fast_handover=o.fast_handover)
+        if isinstance(pacing, RealTimePacing) and o.handover > 0:
+            self._fast.attach()
+            run = PacedRun(
+                plant,
+                self._on_loop,
+                self._in_thread,
+                hand=self._fast,
+                pacing=pacing,
+                budget=o.handover,
+                publish=o.publish,
+                progress=self._report_progress,
+            )
+        per_batch = isinstance(pacing, RealTimePacing) and o.handover <= 0
         task_status.started()
         try:
             while self._on_loop.failure is None:
@@ -200,8 +225,11 @@ class SimWorld:
                 jobs = [inbox.popleft() for _ in range(len(inbox))] if take_jobs else []
                 started = time.perf_counter()
                 self._fast.begin(ticks)
+                call = (
+                    partial(plant.run_batch, publish=self._publishing(ticks)) if per_batch else run
+                )
                 try:
-                    batch = await anyio.to_thread.run_sync(run, ticks, jobs, limiter=self._limiter)
+                    batch = await anyio.to_thread.run_sync(call, ticks, jobs, limiter=self._limiter)
                 except Exception as exc:  # divergence, or a bug in a controller
                     self._fast.take_posts()
                     _log.error("simulation stopped: %s", exc)
@@ -214,6 +242,14 @@ class SimWorld:
             self._fast.close()
             if self._on_loop.failure is None:
                 self._fail(DeviceUnavailableError("the simulation was stopped"), [])
+
+    def _publishing(self, ticks: int) -> bool:
+        """Loop, real time with a hand-off per batch: whether the next batch, of ``ticks``, ends
+        with a snapshot: every ``publish`` simulated s, and when an alarm comes due (a batch that
+        finishes a job takes one anyway). Readers see a snapshot at most that old."""
+        s = self._on_loop
+        end = s.sim_time + ticks * self.plant.tick_time
+        return end - s.published >= self.options.publish - 1e-9 or end >= s.next_alarm - 1e-9
 
     def _tell(self) -> None:
         """Loop: something a quiet world in real time must not sleep through happened."""
@@ -230,11 +266,18 @@ class SimWorld:
 
     def _complete(self, batch: Batch) -> None:
         self._on_loop.snapshot = batch.snapshot
+        self._on_loop.sim_time = max(self._on_loop.sim_time, batch.time)
+        if batch.snapshot.time >= batch.time:
+            self._on_loop.published = batch.time
         self._on_loop.handovers += 1
         for job in batch.finished:
             self._forget(job)
             job.done.set()
         self._ring(batch.snapshot.time)
+        self._report_progress()
+
+    def _report_progress(self) -> None:
+        """Loop: call the progress callbacks of the waiting jobs whose progress changed."""
         for job in self._on_loop.waiting:
             if job.on_progress is not None and job.progress != job.reported:
                 job.reported = job.progress

@@ -6,6 +6,7 @@
     python -m benchmarks.sim --in-process            # the single-process layout only
     python -m benchmarks.sim --layout router-apart   # any layouts, the first one headline
     python -m benchmarks.sim --json results.json
+    python -m benchmarks.sim --fleet-only            # the fleet case only (--fleet N: N robots)
 
 Per scenario (run times, method and results: ``docs/benchmarks.md``, section "Simulation"):
 
@@ -29,10 +30,16 @@ Per scenario (run times, method and results: ``docs/benchmarks.md``, section "Si
 3. bare stepping at rest (no motion); real time: the same system paced by the wall clock in
    the headline layout (target: real-time factor 1, no slips); the CPU an idle world costs in
    real time (beside bare stepping at rest); pick-and-place success; stop-to-halt time.
+4. **fleet** (``_fleet``, ``--fleet N``, 40 by default, 0: skip): a generated scenario of N
+   mobile manipulators, each with a kitting cell of its own, every base driving out and back
+   at once through the remote proxies from a client process, the world in real time recorded
+   with rerun: real-time factor and slips beside a fleet of 4 in the same run (target: >= 0.98,
+   no slip), and N robots in paced runs (``WorldOptions.handover`` 1 s: the simulation thread
+   keeps the clock) beside them.
 
-Child processes (client, router) are ``sys.executable`` children of this script (``--role``),
-on 127.0.0.1 only (free port, multicast scouting off), always stopped by their PID. ``_run``
-holds the results table and the command line.
+Child processes (client, fleet client, router) are ``sys.executable`` children of this script
+(``--role``), on 127.0.0.1 only (free port, multicast scouting off), always stopped by their
+PID. ``_run`` holds the results table and the command line.
 """
 
 from benchmarks.sim._measure import step_through

@@ -23,6 +23,7 @@ from benchmarks.common import (
     machine_info,
 )
 from benchmarks.sim._client import child_client
+from benchmarks.sim._fleet import child_fleet, measure_fleet
 from benchmarks.sim._measure import measure
 from benchmarks.sim._system import LAYOUTS
 from benchmarks.sim._workload import WORKLOADS
@@ -93,6 +94,45 @@ def make_rows(results: dict[str, dict[str, Any]]) -> list[Row]:
     return rows
 
 
+def fleet_rows(fleet: dict[str, Any]) -> list[Row]:
+    """The fleet case: the worst round of each case (real time is judged by its worst)."""
+
+    def worst(case: str) -> dict[str, Any]:
+        return min(fleet["runs"][case], key=lambda r: (r["real_time_factor"], -r["slips"]))
+
+    big, small, paced = worst("fleet"), worst("small"), worst("paced")
+    n, rounds = fleet["robots"], len(fleet["runs"]["fleet"])
+    note = f"worst of {rounds}; {fleet['seconds']:.0f} s windows"
+    return [
+        Row(
+            figure=f"fleet: {n} robots driving, real-time factor (slips: {big['slips']})",
+            value=big["real_time_factor"],
+            unit="x",
+            baseline=f"{small['robots']} robots driving (slips: {small['slips']})",
+            baseline_value=small["real_time_factor"],
+            target=">= 0.98, no slip",
+            met=big["real_time_factor"] >= 0.98 and big["slips"] == 0,
+            note=note,
+        ),
+        Row(
+            figure=f"fleet: {n} robots driving, paced runs (slips: {paced['slips']})",
+            value=paced["real_time_factor"],
+            unit="x",
+            baseline=f"{n} robots, a hand-off per batch",
+            baseline_value=big["real_time_factor"],
+            note=f"handover 1 s; {note}",
+        ),
+        Row(
+            figure=f"fleet: {n} robots driving, CPU of the simulator's process, % of a core",
+            value=100 * big["cpu"],
+            unit="%",
+            baseline=f"{small['robots']} robots",
+            baseline_value=100 * small["cpu"],
+            note=f"paced runs: {100 * paced['cpu']:.0f} %",
+        ),
+    ]
+
+
 def print_details(results: dict[str, dict[str, Any]]) -> None:
     for name, r in results.items():
         halts = ", ".join(f"{1e3 * h:.0f}" for h in r["stop_to_halt_s"])
@@ -125,6 +165,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--in-process", action="store_true", help="the single-process layout only")
     parser.add_argument(
+        "--fleet",
+        type=int,
+        default=40,
+        metavar="N",
+        help="the fleet case: N robots driving at once in real time (default 40; 0: skip)",
+    )
+    parser.add_argument("--fleet-only", action="store_true", help="only the fleet case")
+    parser.add_argument(
         "--sensor-period",
         type=float,
         default=0.5,
@@ -132,7 +180,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the workload reads every sensor every S simulated seconds (0: never; default 0.5)",
     )
     hidden = argparse.SUPPRESS
-    parser.add_argument("--role", choices=("client", "router"), help=hidden)
+    parser.add_argument("--role", choices=("client", "fleet-client", "router"), help=hidden)
+    parser.add_argument("--robots", type=int, help=hidden)
     parser.add_argument("--listen", help=hidden)
     parser.add_argument("--connect", help=hidden)
     parser.add_argument("--mesh", help=hidden)
@@ -140,6 +189,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.role == "router":
         return child_router(args)
+    if args.role == "fleet-client":
+        return child_fleet(args)
     if args.role == "client":
         args.scenario = args.scenario[0]
         return child_client(args)
@@ -150,12 +201,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     started = time.perf_counter()
     results: dict[str, dict[str, Any]] = {}
     with tempfile.TemporaryDirectory(prefix="skimesh-bench-sim-") as tmp:
-        for name in args.scenario or sorted(WORKLOADS):
+        for name in [] if args.fleet_only else args.scenario or sorted(WORKLOADS):
             print(f"{name}: measuring...", file=sys.stderr, flush=True)
             run = partial(measure, period=args.sensor_period)
             results[name] = anyio.run(run, name, args.quick, repeat, layouts, Path(tmp))
+        fleet: dict[str, Any] | None = None
+        if args.fleet > 0:
+            print(f"fleet of {args.fleet}: measuring...", file=sys.stderr, flush=True)
+            seconds, rounds = (5.0, 1) if args.quick else (20.0, 2)
+            fleet = anyio.run(measure_fleet, args.fleet, seconds, rounds, Path(tmp))
     conditions |= {"load_end": load_average(), "calibration_ms_end": calibrate()}
-    rows = make_rows(results)
+    rows = make_rows(results) + (fleet_rows(fleet) if fleet else [])
     print("machine: " + ", ".join(f"{k} {v}" for k, v in info.items()))
     print(
         f"run: {'quick' if args.quick else 'full'}, {time.perf_counter() - started:.0f} s; load "
@@ -163,7 +219,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     print(format_table(rows))
     print_details(results)
+    for case, runs in (fleet or {}).get("runs", {}).items():
+        found = ", ".join(
+            f"{r['real_time_factor']:.3f} ({r['slips']} slips, CPU {100 * r['cpu']:.0f} %)"
+            for r in runs
+        )
+        print(f"fleet, {case} ({runs[0]['robots']} robots): real-time factor {found}")
     if args.json is not None:
         doc = {"machine": info, "conditions": conditions, "rows": rows, "results": results}
+        doc["fleet"] = fleet
         args.json.write_bytes(msgspec.json.format(msgspec.json.encode(doc)))
     return 0 if all(row.met is not False for row in rows) else 1

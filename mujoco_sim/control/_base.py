@@ -66,14 +66,32 @@ Waypoint = tuple[float, float, float]
 def _blocker(
     a: Waypoint, b: Waypoint, half: tuple[float, float], obstacles: Sequence[Footprint]
 ) -> str:
-    """The first obstacle the footprint hits when moving from ``a`` to ``b``, or ""."""
-    n = max(2, math.ceil(math.hypot(b[0] - a[0], b[1] - a[1]) / _SAMPLE) + 1)
+    """The first obstacle the footprint hits when moving from ``a`` to ``b``, or "". Only the
+    obstacles within reach of the line from ``a`` to ``b`` (their centre closer to it than
+    their half diagonal plus the robot's, with its margin) are checked, sample by sample: the
+    cost follows the obstacles near the path, not the size of the site."""
+    reach = math.hypot(*half) + _MARGIN
+    (ax, ay), (dx, dy) = a[:2], (b[0] - a[0], b[1] - a[1])
+    length2 = dx * dx + dy * dy
+    near: list[tuple[str, np.ndarray[Any, Any], float, float, float]] = []
+    for o in obstacles:
+        s = ((o.x - ax) * dx + (o.y - ay) * dy) / length2 if length2 > 0 else 0.0
+        s = min(1.0, max(0.0, s))
+        within = reach + math.hypot(o.hx, o.hy)
+        if math.hypot(o.x - ax - s * dx, o.y - ay - s * dy) <= within:
+            near.append((o.label, footprint_corners(o), o.x, o.y, within))
+    if not near:
+        return ""
+    n = max(2, math.ceil(math.hypot(dx, dy) / _SAMPLE) + 1)
     n = max(n, math.ceil(abs(b[2] - a[2]) / 0.05) + 1)
-    boxes = [(o.label, footprint_corners(o)) for o in obstacles]
     for s in np.linspace(0.0, 1.0, n):
         x, y, yaw = (a[i] + s * (b[i] - a[i]) for i in range(3))
-        robot = rect_corners(x, y, yaw, half[0] + _MARGIN, half[1] + _MARGIN)
-        for label, box in boxes:
+        robot = None
+        for label, box, ox, oy, within in near:
+            if math.hypot(ox - x, oy - y) > within:
+                continue
+            if robot is None:
+                robot = rect_corners(x, y, yaw, half[0] + _MARGIN, half[1] + _MARGIN)
             if rects_overlap(robot, box):
                 return label
     return ""
