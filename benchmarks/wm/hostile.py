@@ -28,9 +28,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import tempfile
 import time
 import uuid
+from pathlib import Path
 
 import anyio
 
@@ -71,9 +73,37 @@ async def timed(wm: WmClient, count: int, ids: list[str], start: int = 0) -> lis
     return [reads, writes]
 
 
-async def phases(config: MeshConfig, attacker: Child, count: int, rounds: int) -> list[list[float]]:
-    """[quiet reads, quiet writes, hostile reads, hostile writes] over ``rounds`` rounds."""
+def run_queue_wait(pid: int) -> float:
+    """Seconds the threads of process ``pid`` have waited for a processor while runnable
+    (``/proc/<pid>/task/*/schedstat``, Linux; 0 elsewhere)."""
+    total = 0
+    for stat in Path(f"/proc/{pid}/task").glob("*/schedstat"):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            total += int(stat.read_text().split()[1])
+    return total / 1e9
+
+
+Waits = dict[str, dict[str, float]]
+"""Per phase (quiet, hostile), per process: seconds waited for a processor."""
+
+
+async def phases(
+    config: MeshConfig, attacker: Child, pids: dict[str, int], count: int, rounds: int
+) -> tuple[list[list[float]], Waits]:
+    """[quiet reads, quiet writes, hostile reads, hostile writes] over ``rounds`` rounds, and
+    what the processes ``pids`` waited for a processor in each phase."""
     out: list[list[float]] = [[], [], [], []]
+    waits: Waits = {phase: dict.fromkeys(pids, 0.0) for phase in ("quiet", "hostile")}
+
+    async def block(
+        phase: str, wm: WmClient, n: int, ids: list[str], start: int
+    ) -> list[list[float]]:
+        before = {name: run_queue_wait(pid) for name, pid in pids.items()}
+        samples = await timed(wm, n, ids, start)
+        for name, pid in pids.items():
+            waits[phase][name] += run_queue_wait(pid) - before[name]
+        return samples
+
     async with open_mesh(config) as mesh, WmClient.connect(ZenohTransport(mesh)) as wm:
         ops = [
             AddElement(type="Gear", label=f"g{i}", properties={"mass": 0.1}) for i in range(2000)
@@ -81,18 +111,18 @@ async def phases(config: MeshConfig, attacker: Child, count: int, rounds: int) -
         reply = await wm.transact(list(ops))
         ids = sorted(v for k, v in reply.ids.items() if k.startswith("#"))
         await wm.request(Sparql(query="ASK { ?s ?p ?o }"))  # the worker is up
-        block = max(count // rounds, 1)
+        n = max(count // rounds, 1)
         for r in range(rounds):
-            quiet = await timed(wm, block, ids, 2 * r * block)
+            quiet = await block("quiet", wm, n, ids, 2 * r * n)
             attacker.send({"attack": True})
             await attacker.expect_async("attacking")
             await anyio.sleep(1.0)  # every hostile request in flight
-            loaded = await timed(wm, block, ids, (2 * r + 1) * block)
+            loaded = await block("hostile", wm, n, ids, (2 * r + 1) * n)
             attacker.send({"attack": False})
             await attacker.expect_async("idle", timeout=180.0)  # the store has no query left
             for i, samples in enumerate([*quiet, *loaded]):
                 out[i] += samples
-    return out
+    return out, waits
 
 
 def _start_store(endpoint: str, mesh: str, data: str) -> Child:
@@ -114,13 +144,14 @@ def run(count: int, rounds: int) -> list[Row]:
         router = stack.enter_context(Child([*_ROLE, "router", "--listen", endpoint], name="router"))
         router.expect("ready")
         tmp = stack.enter_context(tempfile.TemporaryDirectory())
-        stack.enter_context(_start_store(endpoint, mesh, tmp))
+        store = stack.enter_context(_start_store(endpoint, mesh, tmp))
         attacker = Child(
             [*_ROLE, "attacker", "--connect", endpoint, "--mesh", mesh], name="attacker"
         )
         stack.enter_context(attacker)
         attacker.expect("connected")
-        qr, qw, hr, hw = anyio.run(phases, config, attacker, count, rounds)
+        pids = {"store": store.pid, "router": router.pid, "client": os.getpid()}
+        (qr, qw, hr, hw), waits = anyio.run(phases, config, attacker, pids, count, rounds)
         attacker.send({"report": True})
         answered = int(attacker.expect("answered")["answered"])
     rows: list[Row] = []
@@ -142,6 +173,18 @@ def run(count: int, rounds: int) -> list[Row]:
             )
         )
     rows.append(Row(figure="hostile requests answered or refused", value=answered, unit=""))
+    pairs = len(qr)  # a read and a write
+    for name in pids:
+        quiet, hostile = (waits[phase][name] / pairs * 1e6 for phase in ("quiet", "hostile"))
+        rows.append(
+            Row(
+                figure=f"{name}: waited for a processor per read+write, hostile",
+                value=hostile,
+                unit="us",
+                baseline="quiet",
+                baseline_value=quiet,
+            )
+        )
     return rows
 
 
