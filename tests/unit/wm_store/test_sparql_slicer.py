@@ -19,12 +19,14 @@ import pytest
 from wm_store.ontology import Ontology
 from wm_store.protocol import Info, InfoReply, Sparql, SparqlReply
 from wm_store.rdf._slicer import Slicer
-from wm_store.server import StoreConfig, WmService, WmStore
+from wm_store.server import StoreConfig, WmStore
 
-from .stores import running
+from .stores import serving
 from .test_sparql_worker import GEARS, RUNAWAY, add_gears
 
 ROOT = Path(__file__).resolve().parents[3]
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 
 
 class Clock:
@@ -87,70 +89,58 @@ def _state(pid: int) -> str:
     return stat.rsplit(")", 1)[1].split()[0]
 
 
-pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
-
-
 @pytest.mark.anyio
 async def test_the_worker_answers_under_a_steady_stream_of_requests() -> None:
-    store = WmStore(Ontology.default())
-    async with running(store) as s:
-        service = WmService(s)
-        try:
-            await add_gears(s, 30)
-            await service.handle(Sparql(query=GEARS))  # the child is up
-            slicer = service._sparql.slicer
-            heavy = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d a skm:Gear }"
-            results: list[object] = []
+    async with serving(WmStore(Ontology.default())) as (s, service):
+        await add_gears(s, 30)
+        await service.handle(Sparql(query=GEARS))  # the child is up
+        slicer = service._sparql.slicer
+        heavy = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d a skm:Gear }"
+        results: list[object] = []
 
-            async def query() -> None:
-                results.append(await service.handle(Sparql(query=heavy)))
+        async def query() -> None:
+            results.append(await service.handle(Sparql(query=heavy)))
 
-            async with anyio.create_task_group() as tg:
-                tg.start_soon(query)
-                with service._sparql.serving():  # a request that never ends meanwhile
-                    with anyio.fail_after(60):
-                        while not results:
-                            info = await service.handle(Info())
-                            assert isinstance(info, InfoReply)
-                            await anyio.sleep(0.001)
-            (reply,) = results
-            assert isinstance(reply, SparqlReply) and reply.rows[0][0] != "0"
-            assert slicer.pauses > 0, "the child was stopped while the store served"
-            pid = service._sparql.pid
-            assert pid is not None and _state(pid) not in ("T", "t", ""), "running after"
-        finally:
-            await service.aclose()
+        async with anyio.create_task_group() as tg:
+            tg.start_soon(query)
+            with service._sparql.serving():  # a request that never ends meanwhile
+                with anyio.fail_after(60):
+                    while not results:
+                        info = await service.handle(Info())
+                        assert isinstance(info, InfoReply)
+                        await anyio.sleep(0.001)
+        (reply,) = results
+        assert isinstance(reply, SparqlReply) and reply.rows[0][0] != "0"
+        assert slicer.pauses > 0, "the child was stopped while the store served"
+        pid = service._sparql.pid
+        assert pid is not None and _state(pid) not in ("T", "t", ""), "running after"
 
 
 @pytest.mark.anyio
 async def test_a_stopped_child_is_continued_however_its_query_ends() -> None:
     store = WmStore(Ontology.default(), StoreConfig(sparql_timeout=1.5))
-    async with running(store) as s:
-        service = WmService(s)
-        try:
-            await add_gears(s, 50)
-            assert isinstance(await service.handle(Sparql(query=GEARS)), SparqlReply)
-            first = service._sparql.pid
-            assert first is not None
-            with service._sparql.serving():
-                began = time.monotonic()
-                timed_out = await service.handle(Sparql(query=RUNAWAY))  # the limit passes
-                took = time.monotonic() - began
-                assert _state(first) == "", "the runaway's child was killed"
-            assert getattr(timed_out, "code", "") == "query_limit"
-            assert took > 1.5 + service._sparql.slicer.stopped_total - 0.05
-            assert service._sparql.slicer.stopped_total > 0, "stopped time extended the limit"
+    async with serving(store) as (s, service):
+        await add_gears(s, 50)
+        assert isinstance(await service.handle(Sparql(query=GEARS)), SparqlReply)
+        first = service._sparql.pid
+        assert first is not None
+        with service._sparql.serving():
+            began = time.monotonic()
+            timed_out = await service.handle(Sparql(query=RUNAWAY))  # the limit passes
+            took = time.monotonic() - began
+            assert _state(first) == "", "the runaway's child was killed"
+        assert getattr(timed_out, "code", "") == "query_limit"
+        assert took > 1.5 + service._sparql.slicer.stopped_total - 0.05
+        assert service._sparql.slicer.stopped_total > 0, "stopped time extended the limit"
 
-            async def cancelled_query() -> None:
-                with anyio.move_on_after(0.5):
-                    await service.handle(Sparql(query=RUNAWAY))
+        async def cancelled_query() -> None:
+            with anyio.move_on_after(0.5):
+                await service.handle(Sparql(query=RUNAWAY))
 
-            with service._sparql.serving():  # the query is cancelled while its child is stopped
-                await cancelled_query()
-            pid = service._sparql.pid
-            assert pid is not None and _state(pid) not in ("T", "t", ""), "continued"
-        finally:
-            await service.aclose()
+        with service._sparql.serving():  # the query is cancelled while its child is stopped
+            await cancelled_query()
+        pid = service._sparql.pid
+        assert pid is not None and _state(pid) not in ("T", "t", ""), "continued"
 
 
 KILLED_STORE = textwrap.dedent(
