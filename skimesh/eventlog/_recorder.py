@@ -32,7 +32,7 @@ from meshlink import InvalidKeyError, Mesh
 from meshlink.rpc import Decoder, WireError
 from skill_agent.client import EventFeed
 from task_agent.protocol import decode_event
-from wm_store import WmClient
+from wm_store import WmClient, display_name
 from wm_store.protocol import Change, ChangesReply, ChangesSince
 
 from ._records import EventRecord
@@ -88,7 +88,10 @@ class EventRecorder:
         if change.revision <= self._wm_revision:
             return  # already recorded (history and live overlap)
         self._wm_revision = change.revision
-        self.add(self.translator.change(change, _namer(wm)))
+        if wm is None:
+            self.add(self.translator.change(change))
+        else:
+            self.add(self.translator.change(change, lambda i: display_name(wm.find_element(i), i)))
 
     async def wait_stored(self, after: int) -> None:
         """Return once a record with ``seq > after`` is stored."""
@@ -235,14 +238,3 @@ async def _backfill(
         for change in reply.changes:
             take(change)
         revision = reply.changes[-1].revision
-
-
-def _namer(wm: WmClient | None) -> Callable[[str], str]:
-    if wm is None:
-        return str
-
-    def name_of(element_id: str) -> str:
-        element = wm.find_element(element_id)
-        return element.label or element_id if element is not None else element_id
-
-    return name_of

@@ -89,9 +89,8 @@ async def serve_event_log(
             key = mesh.keys.eventlog_rpc()
             await tg.start(mesh.serve, key, service.rpc.serve_on(key))
             info = await anyio.to_thread.run_sync(store.info)
-            _log.info(
-                "event log ready on mesh %r: %s (%d records, world model to revision %d)",
-                mesh.keys.mesh,
+            _log.info(  # "event log ready" is the command's line (shown without -v)
+                "event log %s: %d records, world model to revision %d",
                 store.path,
                 info.count,
                 info.wm_revision,

@@ -107,6 +107,7 @@ async def run_monitor(
     recording = MissionRecording(
         recorder.rec,
         sim_clock=clock,
+        sim_pace=lambda: clock.pace,
         label_of=names.label_of,
         call_text=names.call_text,
         robots=robots,

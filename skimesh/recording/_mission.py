@@ -22,7 +22,11 @@ skills' code. Entities::
     demo/log                 TextLog: the demo's own lines (start-up, verification, summary)
 
 Each entry is on two timelines: ``sim_time`` (simulated seconds, the scene's timeline) and
-``wall_time`` (seconds since the recording began). Rerun keeps the current time per thread:
+``wall_time`` (seconds since the recording began). A task event is placed at its own time: its
+``stamp`` (the task agent's clock) is compared with this host's clock, and an event ``ago``
+seconds old lands ``ago`` wall seconds (``ago * pace`` simulated seconds) before now, so the
+history of a task joined midway keeps its course (before the recording began: negative times);
+a stamp ahead of this host's clock counts as now. Rerun keeps the current time per thread:
 everything here is logged from the event loop's thread, the scene from the simulation thread.
 """
 
@@ -100,7 +104,9 @@ class CallText:
 
 class MissionRecording:
     """Logs the mission into ``rec`` (see the module doc). ``sim_clock`` reads the simulated
-    time; ``robots`` maps agent names to robot entity names (default: the agent's name)."""
+    time, ``sim_pace`` the simulated seconds per wall second (default: real time), ``clock``
+    this host's clock (the task events' stamps are compared with it); ``robots`` maps agent
+    names to robot entity names (default: the agent's name)."""
 
     def __init__(
         self,
@@ -110,9 +116,11 @@ class MissionRecording:
         label_of: LabelOf,
         call_text: Callable[[str, str, Mapping[str, Value]], str] | None = None,
         robots: Mapping[str, str] | None = None,
+        sim_pace: Callable[[], float] = lambda: 1.0,
+        clock: Callable[[], float] = time.time,
     ) -> None:
         self.rec = rec
-        self.sim_clock = sim_clock
+        self.sim_clock, self.sim_pace, self.clock = sim_clock, sim_pace, clock
         self.label_of = label_of
         self.call_text = call_text or (lambda _agent, skill, p: step_text(skill, p, label_of))
         self.robots = dict(robots or {})
@@ -131,9 +139,10 @@ class MissionRecording:
         for robot in sorted(set(self.robots.values())):
             rec.log(f"robots/{robot}/progress", rr.SeriesLines(names=["progress"]), static=True)
 
-    def _now(self) -> None:
-        self.rec.set_time("sim_time", duration=self.sim_clock())
-        self.rec.set_time("wall_time", duration=time.monotonic() - self._t0)
+    def _now(self, ago: float = 0.0) -> None:
+        """The current time, or ``ago`` wall seconds before it, on both timelines."""
+        self.rec.set_time("sim_time", duration=self.sim_clock() - ago * self.sim_pace())
+        self.rec.set_time("wall_time", duration=time.monotonic() - self._t0 - ago)
 
     def _robot(self, agent: str) -> str:
         return self.robots.get(agent, agent)
@@ -164,8 +173,9 @@ class MissionRecording:
         self.agents.add(entry)
 
     def task_event(self, event: TaskEvent) -> None:
-        """One task event: the task log, the plan, the robot's skill timeline."""
-        self._now()
+        """One task event, at its own time: the task log, the plan, the robot's skill
+        timeline."""
+        self._now(max(self.clock() - event.stamp, 0.0))
         level, text = "INFO", ""
         match event:
             case TaskStarted():

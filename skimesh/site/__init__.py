@@ -10,7 +10,8 @@ status file, logs). A site that listens beyond loopback is secure by default
 least-privilege ACL, from :mod:`skimesh.secure`). Errors: :class:`SiteError`.
 """
 
-from ._plan import Component, Plan, SiteError, load_site, make_plan, pick_host
+from ._errors import SiteError
+from ._plan import Component, Plan, load_site, make_plan, pick_host
 from ._probe import probe
 from ._restart import describe_exit, restart_delay
 from ._schema import (

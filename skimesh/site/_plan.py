@@ -4,7 +4,6 @@ that clash, robots served twice) with errors that say what to change."""
 
 from __future__ import annotations
 
-import re
 import socket
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,20 +11,15 @@ from typing import Literal
 
 import msgspec
 
-from ..errors import SkimeshError
+from ._endpoint import ANY_ADDRESS, parse_endpoint
+from ._errors import SiteError
 from ._schema import Agents, Router, Site
 from ._secure import OPERATOR, SiteSecurityPlan, security_of, tls
 
-__all__ = ["Component", "Plan", "SiteError", "load_site", "make_plan", "pick_host"]
+__all__ = ["Component", "Plan", "load_site", "make_plan", "pick_host"]
 
 Kind = Literal["router", "store", "sim", "agents", "task-agent", "monitor", "eventlog"]
-_ENDPOINT = re.compile(r"^(?P<proto>[a-z0-9-]+)/(?P<addr>\[[^\]]+\]|[^:/]+):(?P<port>\d+)(#.*)?$")
-_ANY = {"0.0.0.0", "[::]"}
 _LOCAL = "local"
-
-
-class SiteError(SkimeshError):
-    """A site file that cannot be run as written (the message says what to change)."""
 
 
 @dataclass(frozen=True)
@@ -106,14 +100,6 @@ def pick_host(site: Site, wanted: str | None) -> str:
     raise SiteError(
         f"this machine ({me}) is none of the site's hosts ({', '.join(hosts)}): give --host NAME"
     )
-
-
-def parse_endpoint(endpoint: str) -> tuple[str, str, int]:
-    """(protocol, address, port) of ``proto/address:port``."""
-    m = _ENDPOINT.match(endpoint)
-    if m is None:
-        raise SiteError(f"endpoint {endpoint!r} is not PROTOCOL/ADDRESS:PORT (tcp/10.1.2.3:7447)")
-    return m["proto"], m["addr"], int(m["port"])
 
 
 def make_plan(
@@ -197,7 +183,7 @@ class _Planner:
         """``router``'s first listen endpoint as seen from ``host``."""
         proto, addr, port = parse_endpoint(router.listen[0])
         router_host = self.host_of("a router", router.host)
-        if addr in _ANY:
+        if addr in ANY_ADDRESS:
             if router_host == host:
                 addr = "127.0.0.1"
             else:
@@ -247,7 +233,7 @@ class _Planner:
             for endpoint in router.listen:
                 _, addr, port = parse_endpoint(endpoint)
                 for (other_host, other_port), (other, other_addr) in bound.items():
-                    same = addr == other_addr or addr in _ANY or other_addr in _ANY
+                    same = addr == other_addr or addr in ANY_ADDRESS or other_addr in ANY_ADDRESS
                     if other_host == host and other_port == port and same:
                         raise SiteError(
                             f"ports clash on host {host}: {name} and {other} both listen on "

@@ -18,11 +18,12 @@ copy the folder to the others (``ca-key.pem`` only where new certificates are ma
 from __future__ import annotations
 
 import fcntl
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ._endpoint import ANY_ADDRESS, parse_endpoint
+from ._errors import SiteError
 from ._schema import Site
 
 if TYPE_CHECKING:
@@ -50,17 +51,9 @@ class SiteSecurityPlan:
         return str(self.folder / "router.json5")
 
 
-def _addresses(endpoints: Sequence[str]) -> list[str]:
-    out = []
-    for endpoint in endpoints:
-        rest = endpoint.split("/", 1)[-1].split("#", 1)[0]
-        out.append(rest.rsplit(":", 1)[0])
-    return out
-
-
 def security_of(site: Site, path: Path) -> SiteSecurityPlan | None:
     """The site's security plan, or None for an open mesh (see the module doc)."""
-    listens = [a for r in site.routers for a in _addresses(r.listen)]
+    listens = [parse_endpoint(e)[1] for r in site.routers for e in r.listen]
     beyond = any(a not in LOOPBACK for a in listens)
     if site.security == "none" or (site.security == "auto" and not beyond):
         return None
@@ -71,7 +64,7 @@ def security_of(site: Site, path: Path) -> SiteSecurityPlan | None:
         folder = path.parent / folder
     hosts = {"localhost", "127.0.0.1"}
     hosts.update(h.address for h in site.hosts.values() if h.address)
-    hosts.update(a.strip("[]") for a in listens if a not in ("0.0.0.0", "[::]"))
+    hosts.update(a.strip("[]") for a in listens if a not in ANY_ADDRESS)
     return SiteSecurityPlan(folder.resolve(), tuple(sorted(hosts)))
 
 
@@ -95,7 +88,6 @@ def ensure_credentials(plan: Plan) -> Path:
     component and for the routers, the Zenoh configs); returns the folder. Raises SiteError
     if they cannot be made."""
     from ..secure import SecureError
-    from ._plan import SiteError
 
     security = plan.security
     assert security is not None

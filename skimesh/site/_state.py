@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
 
-from ._plan import SiteError
+from ._errors import SiteError
 
 __all__ = ["Row", "StateDir", "Status", "default_state_dir"]
 

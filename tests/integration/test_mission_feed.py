@@ -1,7 +1,8 @@
 """The mission feed over real Zenoh (loopback router, unique mesh), the path ``skimesh demo``
 and ``skimesh monitor`` record tasks through: joined while a task is held in its middle, it
 finds the task (the task agent's list), records its kept history from seq 1, then its live
-events to the end, each once and in order; the agent's event log lands beside it. Joined after
+events to the end, each once and in order, each at its own time (the history before the
+recording began); the agent's event log lands beside it. Joined after
 the task's end, it records the task from its history only when asked to (``recent``)."""
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from skimesh.recording import MissionFeed, MissionRecording
 from task_agent import TaskClient, new_task_id
 from task_agent.protocol import StepFinished, TaskEvent, TaskFinished, TaskStarted
 
+from .rrd import chunks, column
 from .services import AGENT, running_services
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.anyio]
@@ -90,3 +92,17 @@ async def test_a_feed_joined_mid_task_records_it_from_seq_1_each_event_once(
     assert seen[-1].outcome == "succeeded"
     assert sum(isinstance(e, StepFinished) for e in seen) == 4
     assert f"agents/{AGENT}/events" in recording.agents.entities()
+    wall_times = {  # each task event's line: its wall_time (s since the recording began)
+        str(text): float(str(wall)) / 1e9
+        for chunk in chunks(tmp_path / "feed.rrd")
+        if str(chunk.entity_path) == "/task/events"
+        for text, wall in zip(
+            column(chunk, "TextLog:text"),
+            chunk.to_record_batch().column("wall_time").cast("int64").to_pylist(),
+            strict=True,
+        )
+    }
+    started = [t for text, t in wall_times.items() if text.startswith(f"task {task_id} started")]
+    ended = [t for text, t in wall_times.items() if text.startswith(f"task {task_id} succeeded")]
+    assert len(started) == len(ended) == 1
+    assert started[0] < 0.0 < ended[0], "the history at its own time, before the recording"

@@ -129,9 +129,13 @@ class WmService:
         return await (self.query if read_only else self.rpc).handle_bytes(data)
 
     async def handle(self, request: Request) -> Reply:
-        """Answer one decoded request; the store's errors become :class:`ErrorReply`."""
+        """Answer one decoded request; the store's errors become :class:`ErrorReply`. The
+        SPARQL worker's child is stopped while any other request is served."""
         try:
-            return await self._dispatch(request)
+            if isinstance(request, Sparql):
+                return await self._dispatch(request)
+            with self._sparql.serving():
+                return await self._dispatch(request)
         except WmError as exc:
             return ErrorReply(code=exc.code, message=str(exc))
         except (ValueError, TypeError, KeyError) as exc:

@@ -222,3 +222,46 @@ def test_the_plan_graph_has_a_row_per_agent_in_planned_order(tmp_path: Path) -> 
     assert nodes["0"][1] == nodes["2"][1] < nodes["1"][1] == nodes["3"][1]
     assert nodes["0"][0] == nodes["1"][0] == 0.0 < nodes["3"][0] == nodes["2"][0]
     assert sorted(edges) == [("0", "2"), ("1", "2"), ("1", "3")]
+
+
+def test_task_events_are_recorded_at_their_own_times(tmp_path: Path) -> None:
+    """A task joined midway: its history (fetched at once) lands where it happened on both
+    timelines, ``ago`` seconds back (simulated: at the clock's pace), not at the moment it
+    was fetched; a stamp ahead of this host's clock counts as now."""
+    path = tmp_path / "history.rrd"
+    rec = rr.RecordingStream("skimesh-test")
+    rec.set_sinks(rr.FileSink(str(path)))
+    recording = MissionRecording(
+        rec,
+        sim_clock=lambda: 100.0,
+        sim_pace=lambda: 2.0,  # a world running twice real time
+        clock=lambda: 1000.0,  # this host's clock now
+        label_of=label_of,
+    )
+    t = "t-1"
+    recording.task_event(TaskStarted(task_id=t, seq=1, stamp=970.0, goal="g"))
+    recording.task_event(Replanning(task_id=t, seq=2, stamp=990.0, attempt=1, reason="r"))
+    recording.task_event(TaskFinished(task_id=t, seq=3, stamp=1000.5, outcome="succeeded"))
+    rec.flush()
+    rec.disconnect()
+    rows: list[tuple[str, float, float]] = []  # (text, sim_time, wall_time) of each event
+    for chunk in rerun.chunk.RrdReader(path).stream():
+        if str(chunk.entity_path) != "/task/events":
+            continue
+        batch = chunk.to_record_batch()
+        texts = [str(t[0]) for t in batch.column("TextLog:text").to_pylist()]
+        sims = batch.column("sim_time").cast("int64").to_pylist()
+        walls = batch.column("wall_time").cast("int64").to_pylist()
+        rows += [(t, s / 1e9, w / 1e9) for t, s, w in zip(texts, sims, walls, strict=True)]
+
+    def at(start: str) -> tuple[float, float]:
+        (found,) = [(sim, wall) for text, sim, wall in rows if text.startswith(start)]
+        return found
+
+    (started_sim, started), (replanned_sim, replanned) = at("task t-1 started"), at("replan")
+    assert started_sim == pytest.approx(40.0)  # 30 s ago at 2x: 60 simulated s back
+    assert replanned_sim == pytest.approx(80.0)
+    assert at("task t-1 succeeded")[0] == pytest.approx(100.0)  # ahead of this host: now
+    assert -31.0 < started < -29.0 and -11.0 < replanned < -9.0  # before the recording began
+    assert replanned - started == pytest.approx(20.0, abs=0.1)
+    assert 0.0 <= at("task t-1 succeeded")[1] < 1.0

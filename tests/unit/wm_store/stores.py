@@ -11,7 +11,7 @@ from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.server import WmService, WmStore
 
-__all__ = ["memory_client", "running"]
+__all__ = ["memory_client", "running", "serving"]
 
 
 @asynccontextmanager
@@ -30,3 +30,15 @@ async def memory_client() -> AsyncIterator[WmClient]:
     store = await WmStore.open(Ontology.default())
     async with running(store), WmClient.connect(InMemoryTransport(WmService(store))) as client:
         yield client
+
+
+@asynccontextmanager
+async def serving(store: WmStore) -> AsyncIterator[tuple[WmStore, WmService]]:
+    """Run ``store`` with a :class:`WmService` on it until the block ends; the service is
+    closed first (its SPARQL worker's child ended)."""
+    async with running(store) as s:
+        service = WmService(s)
+        try:
+            yield s, service
+        finally:
+            await service.aclose()
