@@ -39,8 +39,8 @@ class Slicer:
     def __init__(
         self,
         *,
-        max_pause: float = 0.1,
-        min_run: float = 0.01,
+        max_pause: float = 0.5,
+        min_run: float = 0.005,
         linger: float = 0.005,
         clock: Callable[[], float] = anyio.current_time,
         send: Callable[[int, int], None] = os.kill,

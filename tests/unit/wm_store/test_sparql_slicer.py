@@ -95,6 +95,7 @@ async def test_the_worker_answers_under_a_steady_stream_of_requests() -> None:
         await add_gears(s, 30)
         await service.handle(Sparql(query=GEARS))  # the child is up
         slicer = service._sparql.slicer
+        slicer.max_pause, slicer.min_run = 0.1, 0.01  # the bound, made quick to observe
         heavy = "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d a skm:Gear }"
         results: list[object] = []
 
