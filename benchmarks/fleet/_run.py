@@ -107,6 +107,7 @@ def rows(cases: Sequence[Case]) -> list[Row]:
             target, met = f"< {limit:g} s", c.plan_s < limit
         out.append(Row(figure=f"plan {name}", value=c.plan_s, unit="s", target=target, met=met))
         if c.goal == "one" and base is not None and c is not base:
+            aimed = c.robots <= 50  # the target is set for 50 robots; 100 is shown beside it
             out.append(
                 Row(
                     figure=f"plan {name} vs 1 robot",
@@ -114,8 +115,8 @@ def rows(cases: Sequence[Case]) -> list[Row]:
                     unit="s",
                     baseline="1-robot world",
                     baseline_value=base.plan_s,
-                    target="<= 2x",
-                    met=c.plan_s <= 2 * base.plan_s,
+                    target="<= 2x" if aimed else "",
+                    met=c.plan_s <= 2 * base.plan_s if aimed else None,
                 )
             )
         if not math.isnan(c.monolithic_makespan):

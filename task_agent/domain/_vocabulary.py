@@ -122,19 +122,22 @@ class Vocabulary:
         for r in self.relations:
             for rel in self.view.query_relation(predicate=r):
                 ids |= {rel.subject, rel.object}
+        typed: dict[str, str] = {}  # by class: elements of one class get the same type
         for element_id in ids:
             element = self.view.find_element(element_id)
             if element is None:
                 continue
-            relevant = [a for a in self.onto.superclasses(element.type) if a in self.tree]
-            # the type whose chain covers most of the relevant classes (then the nearest)
-            chosen = max(
-                relevant,
-                key=lambda c: (len(set(self._chain(c)) & set(relevant)), -relevant.index(c)),
-                default=ROOT_TYPE,
-            )
+            chosen = typed.get(element.type)
+            if chosen is None:
+                relevant = [a for a in self.onto.superclasses(element.type) if a in self.tree]
+                # the type whose chain covers most of the relevant classes (then the nearest)
+                chosen = typed[element.type] = max(
+                    relevant,
+                    key=lambda c: (len(set(self._chain(c)) & set(relevant)), -relevant.index(c)),
+                    default=ROOT_TYPE,
+                )
+                self.conflicts |= set(relevant) - set(self._chain(chosen))
             self.objects[element_id] = chosen
-            self.conflicts |= set(relevant) - set(self._chain(chosen))
         for c in sorted(self.conflicts):
             self.names.declare(f"is_{c}", "type", 1)
             self.classes.add(c)
