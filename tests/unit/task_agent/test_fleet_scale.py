@@ -10,9 +10,10 @@ from __future__ import annotations
 import pytest
 
 from task_agent import parse_goal
+from task_agent.discovery import agents_from_view
 from task_agent.execution import unmet_goal
 from task_agent.protocol import Planned, StepStarted
-from tests.assets.task_fleet import fleet
+from tests.assets.task_fleet import PLANNER, fleet
 
 pytestmark = pytest.mark.anyio
 
@@ -34,3 +35,15 @@ async def test_twenty_robots_one_kit_each_take_the_decomposed_path() -> None:
         assert ran == {f"r{i}" for i in range(1, ROBOTS + 1)}
         assert unmet_goal(parse_goal(text, f.wm), f.wm) == []
         assert done.replans == 0
+
+
+async def test_two_trays_go_to_two_robots() -> None:
+    # Either robot can fill either tray, on a site small enough to plan whole: the goal's
+    # two parts are allocated before planning, one to each robot, and both are planned apart.
+    async with fleet(start={"r1": 1, "r2": 2}, time_scale=0.001) as f:
+        goal = parse_goal(f.tray_goal(0, 3), f.wm)
+        plan = await PLANNER.plan(agents_from_view(f.wm), f.wm, goal)
+        assert plan.stats.parts == 2
+        assert {s.agent for s in plan.steps} == {"r1", "r2"}
+        done = await f.executor().run_goal(goal)
+        assert done.outcome == "succeeded", done.message
