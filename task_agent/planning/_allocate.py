@@ -9,7 +9,9 @@ behind a hub: :data:`FAR`), plus the metres between them when both have a pose, 
 one hop per :data:`METRES_PER_HOP`. Parts are then assigned by a linear assignment
 (``scipy.optimize.linear_sum_assignment``, the Hungarian method): each agent offers as many
 slots as there are parts per agent (rounded up, plus one), each further slot dearer by the
-mean bid, so the total is least and the work is spread. Each part gets a ranking: its
+mean bid, so the total is least and the work is spread (a goal so large that the matrix
+would pass :data:`ASSIGN_CELLS` cells is allocated greedily instead, cheapest parts first,
+each to the agent whose bid plus its load is least). Each part gets a ranking: its
 assigned agent first, then the others that can take it, cheapest first.
 
 Agents that can take no part are *helpers* (an oven's agent that opens its door for a robot's
@@ -28,7 +30,7 @@ from ..domain import Lit, PlanningTask
 from ..reachability import Typing, Writers, unify
 from ._parts import FactGraph
 
-__all__ = ["FAR", "METRES_PER_HOP", "Allocation", "allocate", "hardware"]
+__all__ = ["ASSIGN_CELLS", "FAR", "METRES_PER_HOP", "Allocation", "allocate", "hardware"]
 
 FAR = 8
 """Hops counted for an element the agent's hardware does not reach (or only through a hub)."""
@@ -37,6 +39,9 @@ METRES_PER_HOP = 5.0
 HUB = 12
 """Facts naming an element beyond which it is a hub for bids (see :mod:`._parts`)."""
 _NONE = 1e9
+ASSIGN_CELLS = 4_000_000
+"""Cells of the assignment's cost matrix (parts x agents x slots, 32 MB) beyond which parts
+are allocated greedily: the Hungarian method is cubic in the parts."""
 
 Point = tuple[float, float]
 
@@ -107,11 +112,14 @@ def allocate(
 def _assign(
     parts: int, agents: Sequence[str], bids: Mapping[tuple[int, str], float]
 ) -> dict[int, str]:
-    """Part -> agent by a least-cost assignment over slots (see the module doc)."""
+    """Part -> agent by a least-cost assignment over slots (see the module doc), or greedily
+    beyond :data:`ASSIGN_CELLS` cells of the cost matrix."""
     if not parts or not agents or not bids:
         return {}
     slots = math.ceil(parts / len(agents)) + 1
     load = sum(bids.values()) / len(bids) + 1.0
+    if parts * len(agents) * slots > ASSIGN_CELLS:
+        return _greedy(parts, bids, load)
     column = {agent: j for j, agent in enumerate(agents)}
     cost = np.full((parts, len(agents) * slots), _NONE)
     for (i, agent), bid in bids.items():
@@ -124,3 +132,18 @@ def _assign(
         for i, c in zip(rows, cols, strict=True)
         if cost[i, c] < _NONE
     }
+
+
+def _greedy(parts: int, bids: Mapping[tuple[int, str], float], load: float) -> dict[int, str]:
+    """Part -> agent, the parts with the cheapest bids first, each to the agent whose bid plus
+    ``load`` for each part it has already is least: O(parts x agents)."""
+    offers: dict[int, list[tuple[float, str]]] = {}
+    for (i, agent), bid in bids.items():
+        offers.setdefault(i, []).append((bid, agent))
+    taken: dict[str, int] = {}
+    out: dict[int, str] = {}
+    for i in sorted(offers, key=lambda i: min(offers[i])):
+        _, agent = min((bid + taken.get(a, 0) * load, a) for bid, a in offers[i])
+        out[i] = agent
+        taken[agent] = taken.get(agent, 0) + 1
+    return out

@@ -11,6 +11,7 @@ from task_agent.discovery import agents_from_view
 from task_agent.domain import Lit, PlanningTask, build_task
 from task_agent.learning import positions
 from task_agent.planning import DECOMPOSE_FROM, Plan, Planner, to_partial_order
+from task_agent.planning import _allocate as allocate_module
 from task_agent.planning import _planner as planner_module
 from task_agent.planning._allocate import _assign, allocate
 from task_agent.planning._nearby import nearby_agents
@@ -187,3 +188,14 @@ def test_a_small_goal_with_parts_for_two_robots_is_allocated_before_planning() -
     # one part, or one agent: the whole task
     one = task_of(fleet, f"contain({fleet.kits[0]}, {fleet.gears[0][0]})")
     assert Planner().solve(one).stats.parts == 0
+
+
+def test_a_goal_too_large_for_the_assignment_is_allocated_greedily(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    bids = {(i, a): 1.0 for i in range(6) for a in ("r1", "r2", "r3")}
+    bids[(4, "r3")] = 0.1  # r3 is nearest to part 4
+    monkeypatch.setattr(allocate_module, "ASSIGN_CELLS", 10)
+    assigned = _assign(6, ["r1", "r2", "r3"], bids)
+    assert assigned[4] == "r3"
+    assert sorted(assigned.values()) == ["r1", "r1", "r2", "r2", "r3", "r3"]
