@@ -80,8 +80,9 @@ from .._goals import Goal, GoalLiteral
 from .._physics import fact_text
 from ..claims import ClaimBook
 from ..discovery import AgentInfo, Discovery
+from ..domain import Lit
 from ..learning import DurationBook, FailedStep, TaskLearning
-from ..planning import PartialOrderPlan, Plan, to_partial_order
+from ..planning import PartialOrderPlan, Plan, PlanStep, to_partial_order
 from ..protocol import (
     GoalCheck,
     LostFact,
@@ -140,6 +141,7 @@ class PlanSource(Protocol):
         *,
         exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
         progress: Callable[[int, int], None] | None = None,
+        previous: Sequence[tuple[Sequence[Lit], Sequence[PlanStep]]] = (),
     ) -> Plan: ...
 
 
@@ -202,6 +204,8 @@ class Executor:
         self.message = ""
         self.planning = ""
         """While a long plan is made: how far it got (set from the planner's thread)."""
+        self._last: tuple[Plan, PartialOrderPlan, int] | None = None
+        """The last plan, its partial order and the index of its first step."""
         self.reasons: list[str] = []
         """Why each replan happened."""
         self.started_at = time.time()
@@ -502,7 +506,9 @@ class Executor:
         busy = self.claiming.busy_agents()
         agents = self._agents(excluded)
         free = free_agents(agents, busy)
-        plan_ = functools.partial(self.planner.plan, exclude=failed, progress=self._planning)
+        plan_ = functools.partial(
+            self.planner.plan, exclude=failed, progress=self._planning, previous=self._left()
+        )
         around = free if busy and free else agents  # all busy: nothing to plan around with
         try:  # around what other tasks hold first, else with it (and wait for it: TaskClaims.claim)
             plan = await plan_(around, self.wm, goal)
@@ -524,6 +530,7 @@ class Executor:
             functools.partial(to_partial_order, plan, timing=timing)
         )
         seconds = time.perf_counter() - started
+        self._last = (plan, order, self._next_step)
         steps = self._steps_of(order)
         self.events.emit(
             Planned,
@@ -537,6 +544,17 @@ class Executor:
             parts=plan.stats.parts,
         )
         return steps
+
+    def _left(self) -> list[tuple[tuple[Lit, ...], list[PlanStep]]]:
+        """What the last plan has left to run, by its blocks of goal parts (a replan keeps
+        the parts a failure did not touch: :meth:`Planner.solve`'s ``previous``)."""
+        if self._last is None:
+            return []
+        plan, order, first = self._last
+        ran = {
+            s.step.ground for i, s in enumerate(order.steps) if first + i in self.steps.succeeded
+        }
+        return plan.remaining(ran)
 
     def _planning(self, done: int, parts: int) -> None:
         """The planner's progress (its worker thread): shown by ``task status`` / ``list``."""

@@ -159,6 +159,8 @@ class StepScheduler:
         self.ran: dict[str, dict[str, Value]] = {}
         """Call id -> the parameters it ran with (task-file data flow)."""
         self.steps_run = 0
+        self.succeeded: set[int] = set()
+        """Indices of the steps that ran to success."""
         self.effects_revision = 0
         self.hold = Hold(runner, events.task_id)
         """The task-level pause (see the module doc)."""
@@ -390,6 +392,8 @@ class StepScheduler:
             outcome.success, outcome.reason, outcome.message = False, reason, message + detail
 
     def _finished(self, outcome: StepOutcome, by_operator: bool) -> StepOutcome:
+        if outcome.success:
+            self.succeeded.add(outcome.index)
         if outcome.reason == "agent_lost":
             self._record_loss(outcome.agent, outcome.index, outcome.skill, outcome.message)
         self.events.emit(

@@ -11,7 +11,9 @@ over the elements near each part, widened until a plan holds on the full task (c
 parts, such as two robots that need each other's spot, are planned together); when a part
 has no plan at any width the whole task is solved (the monolithic path,
 ``decompose=False``, which alone may report a goal unsolvable). For a goal that needs few
-agents, the task is built for the agents near it first.
+agents, the task is built for the agents near it first. A replan passes what the last plan
+has left to run (:meth:`Plan.remaining`): a part whose remaining steps still reach it is kept
+as it was.
 
 :func:`to_partial_order` relaxes the plan's sequence into a :class:`PartialOrderPlan`: the
 :class:`Edge` values that must stay ordered (causal links, threats, conflicts, shared

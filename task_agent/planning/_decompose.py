@@ -43,7 +43,7 @@ from ._allocate import Allocation, Point, allocate, hardware
 from ._parts import FactGraph, parts
 from ._plan import PlanStep
 
-__all__ = ["LEVELS", "TRIES", "Decomposition", "Progress", "Stuck", "solve_in_parts"]
+__all__ = ["LEVELS", "TRIES", "Block", "Decomposition", "Progress", "Stuck", "solve_in_parts"]
 
 LEVELS = ((3, 6), (5, 24))
 """(hops, hub) of the focus of the first two levels (see the module doc)."""
@@ -85,6 +85,44 @@ class Decomposition(msgspec.Struct, kw_only=True):
     """Parts that needed more than the first small problem."""
     objects: int
     """Objects of the largest small problem solved."""
+    blocks: list[tuple[tuple[Lit, ...], list[int]]] = []
+    """Each group of parts planned together: its literals and its steps' indices."""
+    reused: int = 0
+    """Parts whose steps were taken over from the previous plan (``previous``)."""
+
+
+Block = tuple[Sequence[Lit], Sequence[PlanStep]]
+"""A group of parts of an earlier plan of the same task: its literals and the steps of it
+that have not run yet."""
+
+
+def _reuse(
+    task: PlanningTask,
+    state: State,
+    index: int,
+    goal_parts: Sequence[Sequence[Lit]],
+    pending: set[int],
+    previous: Sequence[Block],
+) -> tuple[list[PlanStep], set[int]] | None:
+    """The earlier plan's remaining steps for part ``index`` and the pending parts planned
+    with it, if they are exactly the parts of one earlier block and still reach them from
+    ``state`` on the full task (a replan leaves the parts a failure did not touch as they
+    were)."""
+    mine = set(goal_parts[index])
+    for lits, remaining in previous:
+        block = set(lits)
+        if not mine <= block:
+            continue
+        covered = {j for j in pending if set(goal_parts[j]) <= block}
+        if set().union(*(set(goal_parts[j]) for j in covered)) != block:
+            return None
+        goal = [lit for j in sorted(covered) for lit in goal_parts[j]]
+        if any(s.action not in task.actions for s in remaining):  # its agent is left out now
+            return None
+        if _replays(task, state, remaining, goal) is None:
+            return None
+        return list(remaining), covered
+    return None
 
 
 def _holds(part: Sequence[Lit], state: State) -> bool:
@@ -215,17 +253,21 @@ def solve_in_parts(
     seconds: float,
     where: Mapping[str, Point] | None = None,
     progress: Progress | None = None,
+    previous: Sequence[Block] = (),
 ) -> Decomposition | Stuck:
     """A plan for ``task`` made part by part (see the module doc), or why not: a part has no
     plan at any level (the caller then solves the whole task) or ``seconds`` ran out.
-    ``progress(done, parts)`` is called after each part is planned."""
+    ``progress(done, parts)`` is called after each part is planned. ``previous``: the blocks
+    of an earlier plan of the same goal (a replan): a part whose block's remaining steps
+    still reach it is not planned again."""
     goal_parts = parts(task.goal)
     state = State(task.init)
     graph = FactGraph(state.facts, task.objects)
     allocation = allocate(task, goal_parts, graph, where)
     run = _Parts(task, attempt, time.perf_counter() + seconds, goal_parts, allocation)
     steps: list[PlanStep] = []
-    widened = 0
+    blocks: list[tuple[tuple[Lit, ...], list[int]]] = []
+    widened = reused = 0
     pending = set(range(len(goal_parts)))
     try:
         for index, part in enumerate(goal_parts):
@@ -234,16 +276,20 @@ def solve_in_parts(
             if _holds(part, state):
                 pending.discard(index)
                 continue
-            found = run.plan_part(state, graph, index, pending)
+            kept = _reuse(task, state, index, goal_parts, pending, previous)
+            found = (kept[0], 0, kept[1]) if kept else run.plan_part(state, graph, index, pending)
             if found is None:
                 text = " and ".join(fact_text(lit.pred, lit.args) for lit in part)
                 planned = len(goal_parts) - len(pending)
                 return Stuck(reason="part", part=text, done=planned, parts=len(goal_parts))
             part_steps, level, achieved = found
             widened += level > 0
+            reused += len(achieved) if kept else 0
             pending -= achieved
             if progress is not None:
                 progress(len(goal_parts) - len(pending), len(goal_parts))
+            lits = tuple(lit for j in sorted(achieved) for lit in goal_parts[j])
+            blocks.append((lits, list(range(len(steps), len(steps) + len(part_steps)))))
             for step in part_steps:
                 _, effects = apply(task, GroundStep(step.action, step.args), state)
                 graph.add(effects.adds)
@@ -252,5 +298,11 @@ def solve_in_parts(
         planned = len(goal_parts) - len(pending)
         return Stuck(reason="time", part="", done=planned, parts=len(goal_parts))
     return Decomposition(
-        steps=steps, parts=len(goal_parts), solves=run.solves, widened=widened, objects=run.largest
+        steps=steps,
+        parts=len(goal_parts),
+        solves=run.solves,
+        widened=widened,
+        objects=run.largest,
+        blocks=blocks,
+        reused=reused,
     )

@@ -9,11 +9,12 @@ Pure data, no planner imports.
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from typing import Literal
 
 import msgspec
 
-from ..domain import PlanningTask
+from ..domain import Lit, PlanningTask
 from ..reachability import GroundStep
 
 __all__ = ["Engine", "Plan", "PlanStats", "PlanStep"]
@@ -65,13 +66,16 @@ class PlanStats(msgspec.Struct, frozen=True, kw_only=True):
     """Engine calls of the decomposed path."""
     widened: int = 0
     """Parts whose first small problem had no plan that holds on the full task."""
+    reused: int = 0
+    """Parts whose remaining steps were taken over from the plan before a replan."""
 
     def summary(self) -> str:
         """One line for a person: how long, how (parts or the whole task), how large."""
         how = (
             f"{self.parts} goal parts in {self.part_solves} small problems "
             f"({self.widened} widened; the largest {self.objects_solved} of "
-            f"{self.objects} objects)"
+            f"{self.objects} objects"
+            f"{f'; {self.reused} kept from the plan before' if self.reused else ''})"
             if self.parts
             else f"the whole task ({self.objects_solved} of {self.objects} objects"
             f"{', after the compressed one failed' if self.fallback else ''})"
@@ -83,6 +87,19 @@ class Plan(msgspec.Struct, frozen=True, kw_only=True):
     steps: tuple[PlanStep, ...]
     task: PlanningTask
     stats: PlanStats
+    blocks: tuple[tuple[tuple[Lit, ...], tuple[int, ...]], ...] = ()
+    """Planned by parts: each group of goal parts planned together, its literals and the
+    indices of its steps (a replan passes the remaining ones back: ``Planner.plan(...,
+    previous=...)``)."""
+
+    def remaining(
+        self, done: Collection[GroundStep]
+    ) -> list[tuple[tuple[Lit, ...], list[PlanStep]]]:
+        """Each block's literals and its steps not in ``done`` (steps that ran), in order."""
+        return [
+            (lits, [self.steps[i] for i in indices if self.steps[i].ground not in done])
+            for lits, indices in self.blocks
+        ]
 
     @property
     def duration(self) -> float:

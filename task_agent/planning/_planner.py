@@ -55,7 +55,7 @@ from ..learning import positions
 from ..reachability import diagnose, relevant_objects, replay
 from ._allocate import Point, hardware
 from ._convert import plan_steps, to_unified_planning
-from ._decompose import Progress, Stuck, solve_in_parts
+from ._decompose import Block, Progress, Stuck, solve_in_parts
 from ._engines import SOLVED, UNSOLVABLE, solve_problem
 from ._exclusions import exclude_steps
 from ._nearby import nearby_agents
@@ -174,8 +174,11 @@ class Planner:
         *,
         where: Mapping[str, Point] | None = None,
         progress: Progress | None = None,
+        previous: Sequence[Block] = (),
     ) -> Plan:
-        """A plan for ``task`` (blocking; see the module doc for the errors). ``where``: the
+        """A plan for ``task`` (blocking; see the module doc for the errors). ``previous``:
+        what an earlier plan of the goal has left to run (:meth:`Plan.remaining`): planning
+        by parts, a part whose steps there still reach it is not planned again. ``where``: the
         (x, y) of elements that have a pose, for the allocation's bids. ``progress(done,
         parts)``: told how many of the goal's parts are planned, every
         :data:`PROGRESS_EVERY` seconds once planning has taken that long (a log line too).
@@ -185,7 +188,7 @@ class Planner:
             stuck: Stuck | None = None
             if self.decompose and self._by_parts(task):
                 told = _Logged(start, progress)
-                found = self._solve_in_parts(task, start, where, told)
+                found = self._solve_in_parts(task, start, where, told, previous)
                 if isinstance(found, Plan):
                     return found
                 stuck = found
@@ -210,6 +213,7 @@ class Planner:
         start: float,
         where: Mapping[str, Point] | None,
         progress: Progress,
+        previous: Sequence[Block],
     ) -> Plan | Stuck:
         """The decomposed path (:mod:`._decompose`), within the time-out."""
 
@@ -217,7 +221,9 @@ class Planner:
             result = self._attempt(sub, seconds)
             return result.status in SOLVED, result.steps
 
-        found = solve_in_parts(task, attempt, seconds=self.timeout, where=where, progress=progress)
+        found = solve_in_parts(
+            task, attempt, seconds=self.timeout, where=where, progress=progress, previous=previous
+        )
         if isinstance(found, Stuck):
             return found
         problem = replay(task, [s.ground for s in found.steps])[1]
@@ -230,9 +236,11 @@ class Planner:
             parts=found.parts,
             part_solves=found.solves,
             widened=found.widened,
+            reused=found.reused,
             total_s=time.perf_counter() - start,
         )
-        return Plan(steps=tuple(found.steps), task=task, stats=stats)
+        blocks = tuple((lits, tuple(indices)) for lits, indices in found.blocks)
+        return Plan(steps=tuple(found.steps), task=task, stats=stats, blocks=blocks)
 
     def _solve(self, task: PlanningTask, start: float, stuck: Stuck | None = None) -> Plan:
         deadline = start + self.timeout
@@ -325,15 +333,18 @@ class Planner:
         registry: ConditionRegistry | None = None,
         exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
         progress: Progress | None = None,
+        previous: Sequence[Block] = (),
     ) -> Plan:
         """:meth:`plan_sync` without blocking the loop: each task is built here (it reads
-        ``view``), the solve runs in a worker thread under the limiter (``progress``: see
-        :meth:`solve`; called from that thread)."""
+        ``view``), the solve runs in a worker thread under the limiter (``progress`` and
+        ``previous``: see :meth:`solve`; ``progress`` is called from that thread)."""
         limiter = self._limiter or anyio.CapacityLimiter(1)
         self._limiter = limiter
         for chosen in self._agent_sets(agents, view, goal):
             task, where = self._build(chosen, view, goal, registry, exclude)
-            solve = functools.partial(self.solve, task, where=where, progress=progress)
+            solve = functools.partial(
+                self.solve, task, where=where, progress=progress, previous=previous
+            )
             try:
                 return await anyio.to_thread.run_sync(solve, limiter=limiter)
             except (UnsolvableError, PlannerTimeoutError):

@@ -4,19 +4,27 @@ that widen until they hold on the full task, and the fallback to the whole task.
 
 from __future__ import annotations
 
+import msgspec
 import pytest
 
 from task_agent import PlannerTimeoutError, UnsolvableError, parse_goal
 from task_agent.discovery import agents_from_view
-from task_agent.domain import Lit, PlanningTask, build_task
+from task_agent.domain import GroundFact, Lit, PlanningTask, build_task
 from task_agent.learning import positions
-from task_agent.planning import DECOMPOSE_FROM, Plan, Planner, to_partial_order
+from task_agent.planning import (
+    DECOMPOSE_FROM,
+    Plan,
+    Planner,
+    PlanStep,
+    exclude_steps,
+    to_partial_order,
+)
 from task_agent.planning import _allocate as allocate_module
 from task_agent.planning import _planner as planner_module
 from task_agent.planning._allocate import _assign, allocate
 from task_agent.planning._nearby import nearby_agents
 from task_agent.planning._parts import FactGraph, parts
-from task_agent.reachability import replay
+from task_agent.reachability import State, apply, replay
 from tests.assets.planning.fleet import Fleet, fleet_scene, one_gear_each
 from tests.unit.task_agent.test_planner import oven_task
 
@@ -199,3 +207,40 @@ def test_a_goal_too_large_for_the_assignment_is_allocated_greedily(
     assigned = _assign(6, ["r1", "r2", "r3"], bids)
     assert assigned[4] == "r3"
     assert sorted(assigned.values()) == ["r1", "r1", "r2", "r2", "r3", "r3"]
+
+
+def test_a_replan_keeps_the_parts_a_failure_did_not_touch() -> None:
+    fleet = fleet_scene(4)
+    task = task_of(
+        fleet,
+        " and ".join(f"contain({k}, {g[0]})" for k, g in zip(fleet.kits, fleet.gears, strict=True)),
+    )
+    first = SPLIT.solve(task)
+    assert first.stats.parts == 4 and len(first.blocks) == 4
+    # nothing ran, nothing changed: every part is kept, no engine call
+    again = SPLIT.solve(task, previous=first.remaining(set()))
+    assert again.stats.reused == 4 and again.stats.part_solves == 0
+    assert [s.ground for s in again.steps] == [s.ground for s in first.steps]
+    # r3's drive failed and is banned: r3's part is planned again (a detour, which the
+    # robots waiting at the depot beside it may share: r4's part is coupled to it), the
+    # parts planned before it are kept as they were
+    drive = next(s for s in first.steps if s.agent == "r3" and s.skill == "navigate")
+    banned = exclude_steps(task, [("r3", "navigate", drive.params)])
+    replan = SPLIT.solve(banned, previous=first.remaining(set()))
+    assert replan.stats.reused >= 2 and replan.stats.part_solves >= 1
+    assert valid(replan) and drive.ground not in {s.ground for s in replan.steps}
+    kept = {s.ground for s in first.steps if s.agent in ("r1", "r2")}
+    assert kept <= {s.ground for s in replan.steps}
+    # steps that ran are not run again: r1's first step done, the rest of its part is kept
+    done = first.steps[0]
+    assert done.agent == "r1"
+    after = msgspec.structs.replace(task, init=replay_state(task, [done]))
+    rest = SPLIT.solve(after, previous=first.remaining({done.ground}))
+    assert rest.stats.reused == 4 and done.ground not in {s.ground for s in rest.steps}
+
+
+def replay_state(task: PlanningTask, steps: list[PlanStep]) -> frozenset[GroundFact]:
+    state = State(task.init)
+    for s in steps:
+        apply(task, s.ground, state)
+    return frozenset(state.facts)
