@@ -244,3 +244,15 @@ def replay_state(task: PlanningTask, steps: list[PlanStep]) -> frozenset[GroundF
     for s in steps:
         apply(task, s.ground, state)
     return frozenset(state.facts)
+
+
+def test_long_planning_tells_how_many_parts_are_planned(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(planner_module, "PROGRESS_EVERY", 0.0)  # every part, not every second
+    fleet = fleet_scene(12)
+    told: list[tuple[int, int]] = []
+    SPLIT.solve(
+        task_of(fleet, str(one_gear_each(fleet))), progress=lambda d, n: told.append((d, n))
+    )
+    assert told[0] == (1, 12) and all(n == 12 for _, n in told)
+    assert [d for d, _ in told] == sorted({d for d, _ in told})  # rising, each count once
+    assert told[-1][0] >= 11  # the last is reported when its part is planned, before the end
