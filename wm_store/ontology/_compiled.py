@@ -19,51 +19,28 @@ from typing import Final
 
 import msgspec
 
-from wm_store.ontology._terms import (
-    CardinalityRestriction,
-    ClassInfo,
-    DataPropertyInfo,
-    Declarations,
-    RelationInfo,
-)
+from wm_store.ontology._terms import Declarations
 from wm_store.protocol import ClassDef, OntologyDelta, TemplateDef
 
 __all__ = ["COMPILED_FORMAT", "CompiledOntology", "decode_compiled", "encode_compiled"]
 
-COMPILED_FORMAT: Final = 1
+COMPILED_FORMAT: Final = 2
 """The version of :class:`CompiledOntology`'s layout."""
 
 
 class CompiledOntology(msgspec.Struct, frozen=True, kw_only=True):
-    """An ontology's declarations and run-time additions; ``digest`` is its core's. ``core``
-    and ``taught``: the core's Turtle and the ontology log it holds, from which the graph is
-    rebuilt (rdflib) when one is asked for (SPARQL, Turtle export and import); empty when the
-    sources were not given."""
+    """An ontology's declarations (as read from its graph) and run-time additions;
+    ``digest`` is its core's. ``core`` and ``taught``: the core's Turtle and the ontology log
+    it holds, from which the graph is rebuilt (rdflib) when one is asked for (SPARQL, Turtle
+    export and import); empty when the sources were not given."""
 
     format: int = COMPILED_FORMAT
-    classes: dict[str, ClassInfo]
-    relations: dict[str, RelationInfo]
-    data_properties: dict[str, DataPropertyInfo]
-    restrictions: tuple[CardinalityRestriction, ...]
-    templates: dict[str, TemplateDef]
-    datatypes: frozenset[str]
-    iris: dict[str, str]
+    declarations: Declarations
     added_classes: tuple[ClassDef, ...] = ()
     added_templates: tuple[TemplateDef, ...] = ()
     digest: str = ""
     core: str = ""
     taught: tuple[OntologyDelta, ...] = ()
-
-    def declarations(self) -> Declarations:
-        return Declarations(
-            classes=dict(self.classes),
-            relations=dict(self.relations),
-            data_properties=dict(self.data_properties),
-            restrictions=self.restrictions,
-            templates=dict(self.templates),
-            datatypes=self.datatypes,
-            iris=dict(self.iris),
-        )
 
 
 class _Format(msgspec.Struct):

@@ -143,7 +143,7 @@ class Ontology(OntologyValues):
         try:
             compiled = decode_compiled(data)
             onto = cls(
-                compiled.declarations(),
+                compiled.declarations,
                 None,
                 added_classes=compiled.added_classes,
                 added_templates={t.name: t for t in compiled.added_templates},
@@ -168,16 +168,9 @@ class Ontology(OntologyValues):
         its graph when asked (else it has none)."""
         from wm_store.ontology._compiled import CompiledOntology, encode_compiled
 
-        d = self._decl
         return encode_compiled(
             CompiledOntology(
-                classes=d.classes,
-                relations=d.relations,
-                data_properties=d.data_properties,
-                restrictions=d.restrictions,
-                templates=d.templates,
-                datatypes=d.datatypes,
-                iris=d.iris,
+                declarations=self._decl,
                 added_classes=self._added_classes,
                 added_templates=tuple(self._added_templates.values()),
                 digest=core_digest or self._digest,
