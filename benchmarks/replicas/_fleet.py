@@ -44,11 +44,10 @@ import msgspec
 from skill_agent.protocol import RunEvent, RunResult, StartRun
 from skill_agent.runtime import AgentCore, SimulatedOutcomes, SkillEntry
 from skill_agent.skills import Navigate, Pick, Place, Serve
+from tests.assets.planning.fleet import mobile_manipulator, skill_specs
 from wm_store import (
-    DeviceSpec,
     InMemoryTransport,
     RobotRegistration,
-    SkillSpec,
     WmClient,
     WmTransport,
 )
@@ -58,7 +57,6 @@ from wm_store.server import WmService, WmStore
 
 __all__ = ["Agent", "Fleet", "drive", "fleet"]
 
-_json = msgspec.json.Encoder()
 _SKILLS = (Navigate, Pick, Place, Serve)
 
 
@@ -104,24 +102,7 @@ def _cell_ops(i: int) -> list[Op]:
 
 
 def _registration(i: int) -> RobotRegistration:
-    specs = [
-        SkillSpec(
-            name=s.description.name,
-            skill_type=s.description.family,
-            description=_json.encode(s.description).decode(),
-        )
-        for s in _SKILLS
-    ]
-    return RobotRegistration(
-        agent=f"r{i}",
-        robot_type="MobileManipulator",
-        robot_label=f"robot-{i}",
-        devices=[
-            DeviceSpec(type=t, label=f"{t.lower()}-{i}")
-            for t in ("Arm", "Gripper", "MobileBase", "Camera")
-        ],
-        skills=specs,
-    )
+    return mobile_manipulator(i, skill_specs(s.description for s in _SKILLS))
 
 
 @asynccontextmanager

@@ -31,7 +31,8 @@ from task_agent.execution import CoreRunner, Executor
 from task_agent.planning import Planner
 from task_agent.protocol import TaskEvent, TaskOptions
 from task_agent.service import TaskService
-from wm_store import DeviceSpec, InMemoryTransport, RobotRegistration, SkillSpec, WmClient
+from tests.assets.planning.fleet import mobile_manipulator, skill_specs
+from wm_store import InMemoryTransport, WmClient
 from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Pose, Position, Relation, SetRelation, Value
 from wm_store.server import WmService, WmStore
@@ -39,7 +40,6 @@ from wm_store.server import WmService, WmStore
 __all__ = ["SKILLS", "Fleet", "fleet"]
 
 SKILLS: tuple[type[Skill], ...] = (Navigate, Pick, Place, Serve)
-_json = msgspec.json.Encoder()
 PLANNER = Planner()
 
 
@@ -177,26 +177,11 @@ async def fleet(
         transport = InMemoryTransport(WmService(store))
         async with WmClient.connect(transport, ontology, author="test") as wm:
             scene = await _scene(wm, parts, robots)
-            specs = [
-                SkillSpec(name=c.description.name, skill_type=c.description.family,
-                          description=_json.encode(c.description).decode())
-                for c in SKILLS
-            ]  # fmt: skip
+            specs = skill_specs(c.description for c in SKILLS)
             cores, robot_ids, kits = {}, [], []
             for r in range(1, robots + 1):
                 name = f"r{r}"
-                registered = await wm.register_robot(
-                    RobotRegistration(
-                        agent=name,
-                        robot_type="MobileManipulator",
-                        robot_label=f"robot-{r}",
-                        devices=[
-                            DeviceSpec(type=t, label=f"{t.lower()}-{r}")
-                            for t in ("Arm", "Gripper", "MobileBase", "Camera")
-                        ],
-                        skills=specs,
-                    )
-                )
+                registered = await wm.register_robot(mobile_manipulator(r, specs))
                 robot = registered["$robot"]
                 at = (start or {}).get(name)
                 where = scene["stations"][at - 1] if at else scene["depot"][0]

@@ -12,11 +12,12 @@ subset names only those robots' kits.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Literal
 
 import msgspec
 
+from skill_agent.protocol import SkillDescription
 from skill_agent.skills import Locate, Navigate, Pick, Place, Serve
 from task_agent import Goal, parse_goal
 from task_agent.verification import SceneView
@@ -25,7 +26,7 @@ from wm_store.ontology import Ontology
 from wm_store.protocol import AddElement, Op, Pose, Position, Relation, SetRelation, Value
 from wm_store.scene import SceneState, apply_transaction
 
-__all__ = ["Fleet", "fleet_scene", "one_gear_each"]
+__all__ = ["Fleet", "fleet_scene", "mobile_manipulator", "one_gear_each", "skill_specs"]
 
 _json = msgspec.json.Encoder()
 SKILLS = (Navigate, Locate, Pick, Place, Serve)
@@ -46,6 +47,29 @@ def _apply(state: SceneState, onto: Ontology, ops: Sequence[Op]) -> dict[str, st
     result = apply_transaction(state, onto, ops, revision=state.revision + 1, now=1.0)
     state.revision += 1
     return result.ids
+
+
+def skill_specs(descriptions: Iterable[SkillDescription]) -> list[SkillSpec]:
+    """The registration form of skill descriptions."""
+    return [
+        SkillSpec(name=d.name, skill_type=d.family, description=_json.encode(d).decode())
+        for d in descriptions
+    ]
+
+
+def mobile_manipulator(i: int, skills: Sequence[SkillSpec]) -> RobotRegistration:
+    """Agent ``r<i>`` registering ``robot-<i>``, a mobile manipulator with an arm, a gripper,
+    a base and a camera (``arm-<i>`` ...), offering ``skills``."""
+    return RobotRegistration(
+        agent=f"r{i}",
+        robot_type="MobileManipulator",
+        robot_label=f"robot-{i}",
+        devices=[
+            DeviceSpec(type=t, label=f"{t.lower()}-{i}")
+            for t in ("Arm", "Gripper", "MobileBase", "Camera")
+        ],
+        skills=list(skills),
+    )
 
 
 def fleet_scene(
@@ -87,14 +111,7 @@ def fleet_scene(
         ]
     ids = _apply(state, onto, ops)
     subclasses = {c: onto.subclasses(c) for c in ("Agent", "Robot", "Skill")}
-    specs = [
-        SkillSpec(
-            name=s.description.name,
-            skill_type=s.description.family,
-            description=_json.encode(s.description).decode(),
-        )
-        for s in SKILLS
-    ]
+    specs = skill_specs(s.description for s in SKILLS)
     fleet = Fleet(
         view=SceneView(state, onto),
         agents=[],
@@ -105,16 +122,7 @@ def fleet_scene(
         depot=ids["$depot"],
     )
     for i in range(1, robots + 1):
-        reg = RobotRegistration(
-            agent=f"r{i}",
-            robot_type="MobileManipulator",
-            robot_label=f"robot-{i}",
-            devices=[
-                DeviceSpec(type=t, label=f"{t.lower()}-{i}")
-                for t in ("Arm", "Gripper", "MobileBase", "Camera")
-            ],
-            skills=specs,
-        )
+        reg = mobile_manipulator(i, specs)
         robot = _apply(state, onto, registration_ops(state, reg, subclasses=subclasses))["$robot"]
         where = ids["$depot"] if start == "depot" else ids[f"$s{i}"]
         kit = _apply(
