@@ -119,7 +119,7 @@ def _reuse(
         goal = [lit for j in sorted(covered) for lit in goal_parts[j]]
         if any(s.action not in task.actions for s in remaining):  # its agent is left out now
             return None
-        if _replays(task, state, remaining, goal) is None:
+        if not _reaches(task, state, remaining, goal):
             return None
         return list(remaining), covered
     return None
@@ -129,17 +129,18 @@ def _holds(part: Sequence[Lit], state: State) -> bool:
     return all(((lit.pred, lit.args) in state) == lit.positive for lit in part)
 
 
-def _replays(
+def _reaches(
     task: PlanningTask, state: State, steps: Sequence[PlanStep], part: Sequence[Lit]
-) -> State | None:
-    """The state after ``steps`` from ``state`` on the full task, or None if a step's
-    precondition is false on the way or the part does not hold at the end."""
+) -> bool:
+    """Whether ``steps``, run from ``state`` on the full task, find every precondition true
+    and leave the part holding (stops at the first false precondition: the loop of
+    :func:`~task_agent.reachability.replay`, from a state of the solve)."""
     after = state.copy()
     for step in steps:
         failed, _ = apply(task, GroundStep(step.action, step.args), after)
         if failed:
-            return None
-    return after if _holds(part, after) else None
+            return False
+    return _holds(part, after)
 
 
 class _Parts:
@@ -197,7 +198,7 @@ class _Parts:
         if not solved:
             return None
         self.largest = max(self.largest, len(sub.objects))
-        return steps if _replays(self.task, state, steps, part) is not None else None
+        return steps if _reaches(self.task, state, steps, part) else None
 
     def plan_part(
         self, state: State, graph: FactGraph, index: int, pending: set[int]
