@@ -15,7 +15,14 @@ import logging
 import sys
 from collections.abc import Sequence
 
-__all__ = ["COMMANDS", "build_parser", "describe_error", "main"]
+__all__ = [
+    "COMMANDS",
+    "CONNECTION_OPTIONS",
+    "build_parser",
+    "describe_error",
+    "hoist_connection_options",
+    "main",
+]
 
 #: Every top-level command, in the order of ``skimesh --help``: the module of
 #: :mod:`skimesh.commands` that adds it (its ``add_parser``) and its one-line help, the same as
@@ -99,9 +106,10 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         prog="skimesh",
         description="skimesh: a Zenoh-distributed multi-robot skill mesh. Start with "
         "`skimesh demo`; run services on several hosts with `router`, `wm`, ... and "
-        "`--connect tcp/HOST:7447`. Exit codes: 0 ok, 1 failed, 2 refused (usage, bad input, "
-        "unknown name), 3 unreachable (no reply in time), 4 aborted, 5 the physics "
-        "contradicts the world model, 130 interrupted.",
+        "`--connect tcp/HOST:7447` (the connection options --connect, --mesh, --config and "
+        "--timeout may come before or after a command). Exit codes: 0 ok, 1 failed, "
+        "2 refused (usage, bad input, unknown name), 3 unreachable (no reply in time), "
+        "4 aborted, 5 the physics contradicts the world model, 6 partial, 130 interrupted.",
     )
     parser.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)"
@@ -125,6 +133,33 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
                 if where == module:
                     sub.add_parser(name, help=text)
     return parser
+
+
+#: The options of the mesh and its requests, which every client command takes: given before the
+#: command (``skimesh --connect E agents``) they are moved after it, where its parser reads them.
+CONNECTION_OPTIONS = frozenset(
+    {"--connect", "--listen", "--config", "--mesh", "--mode", "--timeout"}
+)
+
+
+def hoist_connection_options(argv: Sequence[str]) -> list[str]:
+    """``argv`` with the connection options found before the command word moved just after
+    it (``skimesh --connect E task list`` reads as ``skimesh task --connect E list``); a
+    command that takes none refuses them as any unknown option."""
+    head: list[str] = []
+    moved: list[str] = []
+    rest = list(argv)
+    while rest and rest[0].startswith("-"):
+        word = rest.pop(0)
+        if word.split("=", 1)[0] in CONNECTION_OPTIONS:
+            moved.append(word)
+            if "=" not in word and rest:
+                moved.append(rest.pop(0))
+        else:
+            head.append(word)
+    if not rest or not moved:
+        return list(argv)
+    return [*head, rest[0], *moved, *rest[1:]]
 
 
 def _command_in(argv: Sequence[str]) -> str | None:
@@ -164,7 +199,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     and shows its traceback."""
     argv = sys.argv[1:] if argv is None else argv
     debug = "--debug" in argv  # before or after the command, as the connection options
-    argv = [arg for arg in argv if arg != "--debug"]
+    argv = hoist_connection_options([arg for arg in argv if arg != "--debug"])
     args = build_parser(argv).parse_args(argv)
     args.debug = debug
     _configure_logging(args)
@@ -207,7 +242,7 @@ def _expected_in_one_line(record: logging.LogRecord) -> bool:
 def _one_line(error: BaseException, args: argparse.Namespace) -> int:
     """An error a user can act on, as one line per error on stderr; its exit code. Any other
     error (a bug, a SystemExit with a code) propagates."""
-    from .errors import Exit, exit_code, user_errors
+    from .errors import Exit, complain, exit_code, user_errors
 
     known = user_errors()
 
@@ -220,7 +255,7 @@ def _one_line(error: BaseException, args: argparse.Namespace) -> int:
 
         traceback.print_exception(error)
     for leaf in leaves:
-        print(f"skimesh {args.command}: {describe_error(leaf)}", file=sys.stderr)
+        complain(args, describe_error(leaf))
     return max(Exit.REFUSED if u else exit_code(e) for e, u in zip(leaves, usage, strict=True))
 
 

@@ -10,7 +10,15 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-__all__ = ["DemoError", "Exit", "SkimeshError", "UsageError", "exit_code", "user_errors"]
+__all__ = [
+    "DemoError",
+    "Exit",
+    "SkimeshError",
+    "UsageError",
+    "complain",
+    "exit_code",
+    "user_errors",
+]
 
 
 class Exit(IntEnum):
@@ -48,6 +56,19 @@ class DemoError(SkimeshError):
 
 class UsageError(SkimeshError):
     """A command line or input file the command cannot use (exit :attr:`Exit.REFUSED`)."""
+
+
+def complain(args: object, text: str) -> None:
+    """Say what went wrong on stderr, as every command does: ``skimesh task submit: TEXT``
+    (the command's words from the parsed ``args``)."""
+    import sys
+
+    words = ["skimesh"] + [
+        str(getattr(args, dest))
+        for dest in ("command", "task_command", "wm_command")
+        if getattr(args, dest, None)
+    ]
+    print(f"{' '.join(words)}: {text}", file=sys.stderr)
 
 
 def user_errors() -> tuple[type[Exception], ...]:

@@ -16,18 +16,32 @@ from collections.abc import Awaitable, Callable
 
 import anyio
 
-__all__ = ["configure_logging", "run_service", "settle_heap"]
+__all__ = ["PublicNames", "configure_logging", "run_service", "settle_heap"]
 
 
 def configure_logging(verbosity: int) -> None:
-    """``-v`` for INFO, ``-vv`` for DEBUG; warnings and errors always, on stderr."""
-    level = logging.WARNING - 10 * min(verbosity, 2)
-    logging.basicConfig(
-        level=level,
-        stream=sys.stderr,
-        format="%(asctime)s %(levelname).1s %(name)s: %(message)s",
-        datefmt="%H:%M:%S",
-    )
+    """``-v`` for INFO, ``-vv`` for DEBUG; warnings and errors always, on stderr. Each line
+    names its logger by the public concept it comes from (:class:`PublicNames`)."""
+    root = logging.getLogger()
+    if not root.handlers:  # as logging.basicConfig: a host that set up logging keeps its own
+        root.setLevel(logging.WARNING - 10 * min(verbosity, 2))
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(
+            PublicNames("%(asctime)s %(levelname).1s %(concept)s: %(message)s", "%H:%M:%S")
+        )
+        root.addHandler(handler)
+
+
+class PublicNames(logging.Formatter):
+    """Loggers are named by module (``logging.getLogger(__name__)``, so ``-v`` and logging
+    configs can pick a package); a line names the public concept instead, cut before the first
+    private module: ``skill_agent.server._serving`` shows as ``skill_agent.server``."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        parts = record.name.split(".")
+        private = next((i for i, part in enumerate(parts) if part.startswith("_")), len(parts))
+        record.concept = ".".join(parts[: max(1, private)])
+        return super().format(record)
 
 
 def settle_heap() -> None:

@@ -156,7 +156,12 @@ async def serve_agent(
                     try:
                         await wm.unregister_robot(name)
                     except WmError as e:
-                        _log.warning("agent %s could not unregister: %s", name, e)
+                        _log.info(  # not a fault: the store follows the token (presence)
+                            "agent %s not unregistered (%s); the store marks it unavailable "
+                            "when its liveliness token goes",
+                            name,
+                            e,
+                        )
                 token.undeclare()
         _log.info("agent %s stopped", name)
 

@@ -13,6 +13,7 @@ line per event instead (:class:`~skimesh.commands._task_output.ProgressPrinter`)
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
@@ -50,6 +51,13 @@ class _Robot:
     message: str = ""
     fraction: float = -1.0
     since: float = 0.0
+    ended: float | None = None
+    """When its last step ended (None: a step is running): the time in the step stops there."""
+
+    def finish(self, event: StepFinished) -> None:
+        self.phase = "done" if event.success else f"FAILED: {event.reason}"
+        self.message, self.ended = "", event.stamp
+        self.fraction = 1.0 if event.success else -1.0
 
 
 @dataclass
@@ -96,8 +104,7 @@ class TaskView:
                 self._status(event.step, "done" if event.success else "FAILED")
                 ended = self.robots.get(event.agent)
                 if ended is not None and ended.step == event.step:
-                    ended.phase = "idle" if event.success else f"failed: {event.reason}"
-                    ended.skill, ended.fraction = "", -1.0
+                    ended.finish(event)
             case Replanning():
                 self.note = f"replanning (attempt {event.attempt}): {event.reason}"
             case TaskPaused() | TaskResumed():
@@ -112,7 +119,10 @@ class TaskView:
         if step in self.plan:
             self.plan[step].status = status
 
-    def render(self, now: float | None = None) -> RenderableType:
+    def render(self, now: float | None = None, height: int | None = None) -> RenderableType:
+        """The view at ``now``; with ``height`` (the terminal's lines), the rows that matter
+        most where not all fit: running and failed steps, then the next waiting ones, the
+        count of the others below."""
         from rich.console import Group
         from rich.table import Table
         from rich.text import Text
@@ -123,27 +133,69 @@ class TaskView:
         elapsed = 0.0 if self.t0 is None else now - self.t0
         held = "  PAUSED" if self.paused else ""
         head = Text(f"{self.title}  ({elapsed:.1f} s){held}", style="bold")
+        robots_room, plan_room = _room(height, len(self.robots), len(self.plan))
         robots = Table(title="robots", title_justify="left", expand=False)
         for name in ("robot", "step", "skill", "phase", "done", "in step"):
             robots.add_column(name, overflow="fold")
-        for agent, r in sorted(self.robots.items()):
+        shown_robots = sorted(self.robots.items(), key=_robot_rank)
+        for agent, r in shown_robots[:robots_room]:
             done = "" if r.fraction < 0 else _bar(r.fraction)
             step = "" if r.step < 0 else str(r.step)
-            phase = f"{r.phase} {r.message}".strip()
-            robots.add_row(agent, step, r.skill, phase, done, f"{now - r.since:.1f} s")
+            phase = Text(f"{r.phase} {r.message}".strip(), style=_STYLE.get(r.phase[:6], ""))
+            took = (now if r.ended is None else r.ended) - r.since
+            robots.add_row(agent, step, r.skill, phase, done, f"{took:.1f} s")
         plan = Table(title="plan", title_justify="left")
         for name in ("#", "robot", "call", "after", "status"):
             plan.add_column(name, overflow="fold")
-        style = {"done": "green", "running": "yellow", "FAILED": "bold red"}
-        for s in sorted(self.plan.values(), key=lambda s: s.index):
+        steps = sorted(self.plan.values(), key=lambda s: (_RANK[s.status], s.index))
+        for s in sorted(steps[:plan_room], key=lambda s: s.index):
             plan.add_row(
                 str(s.index),
                 s.agent,
                 s.call,
                 s.after,
-                Text(s.status, style=style.get(s.status, "")),
+                Text(s.status, style=_STYLE.get(s.status, "")),
             )
-        return Group(head, robots, plan, Text(self.note))
+        hidden = _hidden(shown_robots[robots_room:], steps[plan_room:])
+        return Group(head, robots, plan, Text(" ".join(filter(None, (hidden, self.note)))))
+
+
+_STYLE = {"done": "green", "running": "yellow", "FAILED": "bold red"}
+_RANK = {"FAILED": 0, "running": 1, "waiting": 2, "done": 3}
+"""Which plan rows to keep when not all fit: failed and running first, then the next
+waiting steps, the steps done last."""
+
+
+def _robot_rank(item: tuple[str, _Robot]) -> tuple[int, list[str | int]]:
+    """Robots in a step first, then those whose last step failed, then by name (r2 < r10)."""
+    name, robot = item
+    rank = 0 if robot.ended is None else 1 if robot.phase.startswith("FAILED") else 2
+    return rank, [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", name)]
+
+
+def _room(height: int | None, robots: int, steps: int) -> tuple[int, int]:
+    """How many robot rows and plan rows fit in ``height`` lines (each table takes 5 lines
+    besides its rows; a plan row may wrap to two); everything when the height is unknown."""
+    if height is None:
+        return robots, steps
+    free = max(0, height - 14)
+    robots_room = max(3, min(robots, free // 3))
+    return robots_room, max(3, (free - robots_room) // 2)
+
+
+def _hidden(robots: list[tuple[str, _Robot]], steps: list[_Step]) -> str:
+    """What did not fit, counted: '(+2 robots not shown; +40 steps not shown: 30 done,
+    10 waiting)'."""
+    parts = []
+    if robots:
+        parts.append(f"+{len(robots)} robots not shown")
+    if steps:
+        counts: dict[str, int] = {}
+        for s in steps:
+            counts[s.status] = counts.get(s.status, 0) + 1
+        kinds = ", ".join(f"{n} {status}" for status, n in sorted(counts.items()))
+        parts.append(f"+{len(steps)} steps not shown: {kinds}")
+    return f"({'; '.join(parts)})" if parts else ""
 
 
 def _bar(fraction: float) -> str:
@@ -162,7 +214,11 @@ async def follow_live(
     from rich.live import Live
 
     view = TaskView()
-    with Live(get_renderable=view.render, console=console, refresh_per_second=4):
+
+    def frame() -> RenderableType:
+        return view.render(height=console.size.height)
+
+    with Live(get_renderable=frame, console=console, refresh_per_second=4):
         async for event in events:
             if isinstance(event, TaskFinished):
                 view.apply(event)

@@ -33,9 +33,12 @@ def result_line(result: RunResult) -> str:
 
 
 def _progress_line(event: Progress) -> str:
+    """``  [executing] drive: driving to Station-1 (40%)``; a step named as its state, or
+    without a message, says no more than it has."""
     done = f" ({event.fraction:.0%})" if event.fraction >= 0 else ""
-    step = f" {event.step}:" if event.step else ""
-    return f"  [{event.state}]{step} {event.message}{done}".rstrip()
+    step = "" if event.step in ("", event.state) else f" {event.step}"
+    said = f"{step}: {event.message}" if step and event.message else f"{step} {event.message}"
+    return f"  [{event.state}]{said.rstrip()}{done}"
 
 
 @dataclass
@@ -106,11 +109,11 @@ def follow_run(view: RunView) -> Iterator[Callable[[RunEvent], None]]:
     that feeds it. The last state stays on the screen, then the result's line follows."""
     from rich.live import Live
 
-    with Live(view.render(), refresh_per_second=8, transient=False) as live:
+    with Live(get_renderable=view.render, refresh_per_second=8, transient=False) as live:
 
         def on_event(event: RunEvent) -> None:
             view.take(event)
-            live.update(view.render())
+            live.refresh()
 
         yield on_event
 

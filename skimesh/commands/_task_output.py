@@ -29,6 +29,8 @@ from task_agent.protocol import (
     VerifyProblem,
 )
 
+from .._words import counted
+
 __all__ = [
     "ProgressPrinter",
     "check_lines",
@@ -99,7 +101,7 @@ class ProgressPrinter:
         who = ", ".join(sorted({s.agent or "any" for s in event.steps})) or "nobody"
         head = (
             f"plan {event.attempt} ({event.planner}, {event.plan_seconds:.2f} s): "
-            f"{len(event.steps)} steps on {who}; makespan {event.makespan:.1f} s "
+            f"{counted(len(event.steps), 'step')} on {who}; makespan {event.makespan:.1f} s "
             f"(sequential {event.sequential:.1f} s)"
         )
         rows = []
@@ -119,13 +121,13 @@ class ProgressPrinter:
         return f"FAILED{who} ({event.reason}): {event.message}"
 
     def _summary(self, event: TaskFinished) -> list[str]:
-        plural = "s" if event.replans != 1 else ""
         lines = [
             f"task {event.task_id} {event.outcome} in {event.duration:.2f} s: "
-            f"{event.steps_run} steps run, {event.replans} replan{plural}"
+            f"{counted(event.steps_run, 'step')} run, {counted(event.replans, 'replan')}"
         ]
         for agent in sorted(self.count):
-            lines.append(f"  {agent}: {self.count[agent]} steps, {self.busy[agent]:.2f} s busy")
+            steps = counted(self.count[agent], "step")
+            lines.append(f"  {agent}: {steps}, {self.busy[agent]:.2f} s busy")
         lines += makespan_lines(event.estimated_makespan, event.actual_makespan)
         if self.busy and event.actual_makespan:
             share = sum(self.busy.values()) / len(self.busy)
@@ -190,8 +192,8 @@ def info_lines(info: TaskInfo) -> list[str]:
     state = f"{info.outcome} (paused)" if info.paused else info.outcome
     return [
         f"{info.task_id}  {state}  {info.goal or info.name}",
-        f"  started {time.ctime(info.started_at)}{ended}; {info.steps_run} steps run, "
-        f"{info.replans} replans",
+        f"  started {time.ctime(info.started_at)}{ended}; {counted(info.steps_run, 'step')} run, "
+        f"{counted(info.replans, 'replan')}",
         *makespan_lines(info.estimated_makespan, info.actual_makespan),
         *([f"  {info.message}"] if info.message else []),
         *partial_lines(info.partial),

@@ -13,6 +13,7 @@ SIGTERM) stops the run on the agent (its ``on_preempt`` runs) before the command
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import sys
@@ -32,7 +33,7 @@ from wm_store import WmClient, WmError, ZenohTransport
 from wm_store.ontology import TYPED_KINDS, did_you_mean
 from wm_store.protocol import Value
 
-from ..errors import Exit, SkimeshError
+from ..errors import Exit, SkimeshError, complain
 from ..runtime import run_service
 from . import _runs as runs_command
 from ._connect import mesh_session
@@ -316,16 +317,19 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
             interrupted.append(True)
             raise
         except AgentTransportError as e:
-            print(f"error: {await _not_alive(args) or e}", file=sys.stderr)
-            return EXIT_UNREACHABLE
+            said, code = await _not_alive(args) or (str(e), EXIT_UNREACHABLE)
+            complain(args, said)
+            return code
         except TimeoutError:
-            print(f"error: no result within {args.deadline:g} s (run stopped)", file=sys.stderr)
+            deadline = getattr(args, "deadline", None)
+            within = f"--deadline {deadline:g} s" if deadline else f"--timeout {args.timeout:g} s"
+            complain(args, f"no result within {within} (run stopped)")
             return EXIT_UNREACHABLE
         except SkillError as e:
-            print(f"refused: {e}", file=sys.stderr)
+            complain(args, str(e))
             return EXIT_REFUSED
         except MeshlinkError as e:
-            print(f"error: {e}", file=sys.stderr)
+            complain(args, str(e))
             return EXIT_UNREACHABLE
 
     code = run_service(main)
@@ -335,24 +339,32 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
     return code
 
 
-async def _not_alive(args: argparse.Namespace) -> str:
-    """For an agent that did not answer: "no agent X is alive", naming the closest live agents
-    (from the liveliness tokens, at once), or "" when X is alive or the mesh cannot tell."""
+async def _not_alive(args: argparse.Namespace) -> tuple[str, Exit] | None:
+    """For an agent that did not answer, at once: "no agent X" naming the closest names
+    (refused: the world model knows no such agent), or "agent X is not alive" (unreachable:
+    it is registered, its process is gone); None when X is alive or the mesh cannot tell."""
     name = getattr(args, "agent", None)
     if not name:
-        return ""
+        return None
+    registered: dict[str, dict[str, object]] | None = None
     try:
         async with mesh_session(args) as mesh:
             alive = await list_agents(mesh, timeout=min(args.timeout, 2.0))
+            if name not in alive:
+                with contextlib.suppress(WmError):
+                    registered = await registered_agents(mesh, timeout=min(args.timeout, 2.0))
     except MeshlinkError:
-        return ""
+        return None
     if name in alive:
-        return ""
+        return None
     where = f"mesh {args.mesh!r}"
+    listed = f" (alive: {', '.join(alive)})" if alive else " (none is alive)"
+    if registered is not None and name not in registered:
+        hint = did_you_mean(name, sorted(set(alive) | set(registered))).rstrip(".")
+        return f"no agent {name!r} on {where}{hint}{listed}", Exit.REFUSED
     if not alive:
-        return f"no agent is alive on {where} (is `skimesh agent` running there?)"
-    hint = did_you_mean(name, alive).rstrip(".")
-    return f"no agent {name!r} is alive on {where}{hint} (alive: {', '.join(alive)})"
+        return f"no agent is alive on {where} (is `skimesh agent` running there?)", EXIT_UNREACHABLE
+    return f"agent {name!r} is not alive on {where}{listed}", EXIT_UNREACHABLE
 
 
 def _print_json(obj: object) -> None:

@@ -32,7 +32,7 @@ from meshlink import Mesh, MeshlinkError, Sample, Subscription, add_mesh_argumen
 from task_agent import OperatorClient, TaskError
 from task_agent.protocol import PendingStep, SeenAt
 
-from ..errors import Exit, exit_code
+from ..errors import Exit, UsageError, complain, exit_code
 from ..runtime import run_service
 from ._connect import mesh_session
 from ._render import plain_help
@@ -114,7 +114,7 @@ def _main(args: argparse.Namespace) -> int:
                 if args.answer:
                     return await _answer(client, *args.answer, message=args.message, seen=args.seen)
                 if args.seen:
-                    print("error: --seen goes with --answer", file=sys.stderr)
+                    complain(args, "--seen goes with --answer")
                     return Exit.REFUSED
                 interactive = args.interactive or (
                     sys.stdin.isatty() and not args.json and args.wait is None
@@ -124,7 +124,7 @@ def _main(args: argparse.Namespace) -> int:
                         return await _interactive(client, wakeups)
                     return await _list(args, client, wakeups)
         except (TaskError, MeshlinkError) as e:
-            print(f"error: {e}", file=sys.stderr)
+            complain(args, str(e))
             return exit_code(e)
 
     return run_service(main)
@@ -180,8 +180,7 @@ async def _answer(
     seen: list[SeenAt],
 ) -> int:
     if verdict.lower() not in VERDICTS:
-        print(f"error: the verdict is 'success' or 'failure', not {verdict!r}", file=sys.stderr)
-        return Exit.REFUSED
+        raise UsageError(f"the verdict is 'success' or 'failure', not {verdict!r}")
     success = VERDICTS[verdict.lower()]
     print(await client.answer(request_id, success, message, author="cli", seen=seen))
     return 0

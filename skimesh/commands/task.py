@@ -30,6 +30,7 @@ import sys
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
+from typing import Any
 
 import anyio
 import msgspec
@@ -45,7 +46,7 @@ from task_agent.protocol import (
 )
 from wm_store import WmClient, WmError, ZenohTransport
 
-from ..errors import Exit, exit_code
+from ..errors import Exit, complain, exit_code
 from ..runtime import run_service
 from . import _plan as plan_command
 from . import operator as operator_command
@@ -122,6 +123,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     agent.set_defaults(func=_serve)
 
     task = sub.add_parser("task", help="submit, follow, list and abort tasks")
+    _client_arguments(task, repeat=False)
     cmds = task.add_subparsers(dest="task_command", metavar="COMMAND")
     task.set_defaults(func=lambda _a: _usage(task))
 
@@ -313,17 +315,25 @@ def _follow_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _client_arguments(p: argparse.ArgumentParser) -> None:
-    add_mesh_arguments(p)
+def _client_arguments(p: argparse.ArgumentParser, *, repeat: bool = True) -> None:
+    """The options of every ``task`` command, on ``skimesh task`` itself (``repeat=False``:
+    with their defaults) and again on each of its commands (set only where given), so they
+    may come before or after the command: ``skimesh task --connect E list`` or ``skimesh task
+    list --connect E``."""
+    add_mesh_arguments(p, repeat=repeat)
+    given: dict[str, Any] = {"default": argparse.SUPPRESS} if repeat else {}
     p.add_argument(
         "--timeout",
         type=float,
-        default=5.0,
         metavar="S",
         help="seconds to wait for the task agent to answer a request (default: 5)",
+        **(given or {"default": 5.0}),
     )
     p.add_argument(
-        "--json", action="store_true", help="machine-readable output (JSON, one per line)"
+        "--json",
+        action="store_true",
+        help="machine-readable output (JSON, one per line)",
+        **given,
     )
 
 
@@ -379,14 +389,16 @@ def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Await
             interrupted.append(True)
             raise
         except VerificationError as e:
-            print(f"refused: {e}", file=sys.stderr)
+            complain(args, str(e))
             print_problems(getattr(e, "problems", []))
             return Exit.REFUSED
         except (TaskError, MeshlinkError, OSError) as e:
-            print(f"error: {e}", file=sys.stderr)
+            complain(args, str(e))
             return exit_code(e)
         except TimeoutError:
-            print("error: the task did not finish within --deadline", file=sys.stderr)
+            deadline = getattr(args, "deadline", None)
+            within = f"--deadline {deadline:g} s" if deadline else f"--timeout {args.timeout:g} s"
+            complain(args, f"no end of the task within {within}")
             return Exit.UNREACHABLE
 
     code = run_service(main)
@@ -533,7 +545,7 @@ async def _abort(args: argparse.Namespace) -> int:
     else:
         print(reply)
     if info.outcome == "running":
-        print(f"error: task {args.task_id} is still running after the abort", file=sys.stderr)
+        complain(args, f"task {args.task_id} is still running after the abort")
         return Exit.FAILED
     return 0
 

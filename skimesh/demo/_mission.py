@@ -20,6 +20,7 @@ import anyio
 from task_agent import Goal, TaskClient, new_task_id
 from task_agent.protocol import TaskFinished, TaskOptions
 
+from .._words import counted
 from ._check import FactCheck, goal_holds, verify_goal
 from ._output import MissionView
 from ._stack import Stack
@@ -132,16 +133,16 @@ def summary_lines(result: MissionResult, view: MissionView, *, recording: str) -
         phys = {True: "yes", False: "NO", None: "-"}[c.physics]
         lines.append(f"     {c.fact:<36} world model {wm:<3}  physics {phys:<3}  {c.detail}")
     if f is not None:
-        plural = "" if f.replans == 1 else "s"
         lines.append(
-            f"   task {f.task_id} {f.outcome}: {f.steps_run} steps run, {f.replans} replan{plural}"
+            f"   task {f.task_id} {f.outcome}: {counted(f.steps_run, 'step')} run, "
+            f"{counted(f.replans, 'replan')}"
         )
     plan_time = sum(p.plan_seconds for p in view.plans)
     if view.plans:
         first = view.plans[0]
         lines.append(
             f"   planning: {plan_time:.2f} s in {len(view.plans)} plan(s); first plan "
-            f"{len(first.steps)} steps, estimated makespan {first.makespan:.1f} s vs "
+            f"{counted(len(first.steps), 'step')}, estimated makespan {first.makespan:.1f} s vs "
             f"{first.sequential:.1f} s one step at a time"
         )
     if view.wall_end is not None:
@@ -153,6 +154,7 @@ def summary_lines(result: MissionResult, view: MissionView, *, recording: str) -
         )
     for agent, stats in sorted(view.robots.items()):
         failed = f", {stats.failed} failed" if stats.failed else ""
-        lines.append(f"     {agent:<10} {stats.steps} steps{failed}, busy {stats.busy:.1f} s")
+        steps = counted(stats.steps, "step")
+        lines.append(f"     {agent:<10} {steps}{failed}, busy {stats.busy:.1f} s")
     lines.append(f"   recording: {recording}")
     return lines

@@ -37,6 +37,7 @@ from task_agent.protocol import (
 )
 from wm_store.protocol import Value
 
+from .._words import counted
 from ..recording import step_text
 
 __all__ = ["MissionView", "RobotStats"]
@@ -158,7 +159,8 @@ class MissionView:
         agents = sorted({s.agent for s in plan.steps})
         head = (
             f"    plan {plan.attempt} by {plan.planner or 'the planner'} in "
-            f"{plan.plan_seconds:.2f} s: {len(plan.steps)} steps on {', '.join(agents)}; "
+            f"{plan.plan_seconds:.2f} s: {counted(len(plan.steps), 'step')} on "
+            f"{', '.join(agents)}; "
             f"estimated makespan {plan.makespan:.1f} s in parallel, {plan.sequential:.1f} s "
             "one step at a time"
         )

@@ -292,5 +292,10 @@ async def serve_operator(
                     try:
                         await wm.unregister_robot(name)
                     except WmError as e:
-                        _log.warning("operator %s could not unregister: %s", name, e)
+                        _log.info(  # not a fault: the store follows the token (presence)
+                            "operator %s not unregistered (%s); the store marks it unavailable "
+                            "when its liveliness token goes",
+                            name,
+                            e,
+                        )
                 token.undeclare()

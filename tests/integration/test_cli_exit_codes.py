@@ -6,9 +6,11 @@ stderr (no warning, traceback or leak report), the simulator too."""
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -34,7 +36,8 @@ ON_THE_MESH: list[tuple[str, Exit, str]] = [
         Exit.REFUSED,
         "did you mean 'Gear-1'",
     ),
-    ("run r9 navigate", Exit.UNREACHABLE, "no agent 'r9' is alive"),
+    ("run r9 navigate", Exit.REFUSED, "no agent 'r9' on mesh 'exit-codes' (alive: "),
+    ("run r11 navigate", Exit.REFUSED, "did you mean 'r1'"),
     ("task status t-nothing", Exit.REFUSED, "no task 't-nothing'"),
     ("task submit --goal contain(KitBox-1,Gear-11)", Exit.REFUSED, "did you mean 'Gear-1'"),
     ("task submit --goal contain(KitBox-1,Shelf-1)", Exit.REFUSED, "unsolvable"),
@@ -105,6 +108,44 @@ def test_exit_codes_on_a_mesh(site: list[str], command: str, code: Exit, said: s
     assert done.returncode == code, f"{done.stdout}\n{done.stderr}"
     assert said in done.stderr + done.stdout, done.stderr
     assert "Traceback" not in done.stderr, done.stderr
+
+
+def test_connection_options_before_the_command(site: list[str]) -> None:
+    """The same options before ``task``, between it and its command, or at the end."""
+    for words in (
+        [*site, "task", "list"],
+        ["task", *site, "list"],
+        ["task", "list", *site],
+        [*site, "agents"],
+    ):
+        done = skimesh(*words)
+        assert done.returncode == Exit.OK, f"{words}: {done.stderr}"
+
+
+def test_an_agent_that_was_registered_and_died_is_unreachable(
+    site: list[str], tmp_path: Path
+) -> None:
+    """``run`` on an agent the world model knows but whose process is gone: exit 3, at once,
+    saying it is not alive (an unknown name is exit 2, above)."""
+    r2 = Child(
+        ["-m", "skimesh", "agent", "--scenario", "kitting", "--robot", "r2", "--simulate", *site],
+        name="r2",
+    )
+    try:
+        r2.wait_stderr("agent r2 ready", timeout=120)
+    finally:
+        r2.kill()
+    deadline = time.monotonic() + 30  # the router drops r2's token when its link closes
+    while True:
+        listed = skimesh("agents", "--json", *site)
+        rows = {row["agent"]: row for row in json.loads(listed.stdout)}
+        if not rows["r2"]["alive"] or time.monotonic() > deadline:
+            break
+    assert not rows["r2"]["alive"], rows
+    done = skimesh("run", "r2", "navigate", *site)
+    assert done.returncode == Exit.UNREACHABLE, done.stderr
+    assert "agent 'r2' is not alive on mesh 'exit-codes'" in done.stderr, done.stderr
+    assert done.stderr.startswith("skimesh run: ") and "Traceback" not in done.stderr
 
 
 @pytest.mark.parametrize("command", ON_AN_EMPTY_MESH)

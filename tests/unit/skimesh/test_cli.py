@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from meshlink import MeshConfig, mesh_config_from_args
-from skimesh.cli import build_parser, describe_error, main
+from skimesh.cli import build_parser, describe_error, hoist_connection_options, main
 
 ROUTER_A, ROUTER_B = "tcp/10.0.0.1:7447", "tcp/10.0.0.2:7447"
 ZENOH_FLAGS = ["--connect", ROUTER_A, "--connect", ROUTER_B, "--config", "site.json5"]
@@ -125,6 +125,48 @@ def test_wm_connection_options_go_before_or_after_the_sub_command() -> None:
         assert args.timeout == 2.0
     plain = parse("wm", "teach", "x.ttl")
     assert plain.mesh == "default" and plain.timeout == 5.0 and plain.connect is None
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        "task --connect {r} --mesh m1 --timeout 2 list",
+        "task list --connect {r} --mesh m1 --timeout 2",
+        "task --connect {r} list --mesh m1 --timeout 2",
+        "--connect {r} --mesh m1 task --timeout 2 list",
+        "-v --connect={r} --mesh=m1 --timeout 2 task list",
+    ],
+)
+def test_task_connection_options_go_anywhere(argv: str) -> None:
+    """Before the command, between ``task`` and its command, after it: the same options."""
+    words = hoist_connection_options(argv.format(r=ROUTER_A).split())
+    args = build_parser(words).parse_args(words)
+    assert args.task_command == "list"
+    assert mesh_config_from_args(args) == MeshConfig(connect=(ROUTER_A,), mesh="m1")
+    assert args.timeout == 2.0 and args.json is False
+    plain = parse("task", "list")
+    assert plain.mesh == "default" and plain.timeout == 5.0 and plain.connect is None
+
+
+def test_connection_options_before_a_command_reach_it() -> None:
+    assert hoist_connection_options(["--debug", "--connect", "E", "agents", "r1"]) == [
+        "--debug", "agents", "--connect", "E", "r1",
+    ]  # fmt: skip
+    args = build_parser(["agents"]).parse_args(
+        hoist_connection_options(["--mesh", "m2", "agents", "--timeout", "3"])
+    )
+    assert args.mesh == "m2" and args.timeout == 3.0
+    unchanged = ["-v", "agents", "--connect", "E"]
+    assert hoist_connection_options(unchanged) == unchanged
+
+
+def test_a_command_without_connection_options_refuses_them(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main(["--mesh", "m1", "demo"])
+    assert stop.value.code == 2
+    assert "unrecognized arguments: --mesh m1" in capsys.readouterr().err
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:

@@ -12,10 +12,12 @@ from skill_agent.protocol import Progress, RunResult
 from skimesh.commands._run_view import RunLines, RunView
 
 
-def progress(seq: int, message: str, fraction: float = -1.0, state: str = "executing") -> Progress:
+def progress(
+    seq: int, message: str, fraction: float = -1.0, state: str = "executing", step: str = "execute"
+) -> Progress:
     return Progress(
         run_id="run-1", agent="r1", skill="navigate", seq=seq, state=state,  # type: ignore[arg-type]
-        message=message, fraction=fraction, step="execute",
+        message=message, fraction=fraction, step=step,
     )  # fmt: skip
 
 
@@ -27,12 +29,16 @@ RESULT = RunResult(
 
 def test_into_a_pipe_a_line_per_change_and_no_repeats(capsys: pytest.CaptureFixture[str]) -> None:
     lines = RunLines()
+    lines(progress(0, "", state="pre_sense", step="pre_sense"))
+    lines(progress(0, ""))
     for i, fraction in enumerate((0.1, 0.2, 0.3)):
         lines(progress(i, "driving to Station-1", fraction))
     lines(progress(4, "turning"))
     lines(RESULT)
     out = capsys.readouterr().out.splitlines()
     assert out == [
+        "  [pre_sense]",
+        "  [executing] execute",
         "  [executing] execute: driving to Station-1 (10%)",
         "  [executing] execute: turning",
         "navigate run-1 succeeded: at Station-1",

@@ -22,7 +22,7 @@ def test_plan_rows_name_elements_by_label_and_id() -> None:
         names={"Gear-1": "Pulley-4 (Gear-1)", "PartBox-1": "PartBox-1"},
     )
     head, row = ProgressPrinter().lines(event)
-    assert "1 steps on r1" in head
+    assert "1 step on r1" in head
     assert "pick(object=Pulley-4 (Gear-1), holder=PartBox-1, width=0.04)" in row
     # An older task agent sends no names: the ids are printed as they are.
     bare = Planned(task_id="t", seq=2, stamp=0.0, steps=[step])
@@ -100,7 +100,59 @@ def test_the_live_view_shows_robots_and_the_plan_as_the_task_goes() -> None:
     assert "running" in rows["0"] and "waiting" in rows["1"]
     view.apply(StepFinished(task_id="t-1", seq=5, stamp=103.0, step=0, agent="r1",
                             skill="navigate", success=True, reason="succeeded"))  # fmt: skip
-    assert view.plan[0].status == "done" and view.robots["r1"].phase == "idle"
+    assert view.plan[0].status == "done" and view.robots["r1"].phase == "done"
+    # A robot whose step ended shows that step done, its time stopped at the step's end.
+    out = io.StringIO()
+    Console(file=out, width=120, force_terminal=False, color_system=None).print(
+        view.render(now=130.0)
+    )
+    robot_row = next(line for line in out.getvalue().splitlines() if line.startswith("│ r1"))
+    assert "navigate" in robot_row and "done" in robot_row and "100%" in robot_row
+    assert "2.8 s" in robot_row and "driving" not in robot_row
+
+
+def test_the_live_view_keeps_the_rows_that_matter_when_not_all_fit() -> None:
+    import io
+
+    from rich.console import Console
+
+    from skimesh.commands._live import TaskView
+    from task_agent.protocol import StepFinished, StepStarted, TaskStarted
+
+    view = TaskView()
+    view.apply(TaskStarted(task_id="t-1", seq=1, stamp=0.0, goal="g"))
+    steps = [PlannedStep(index=i, agent=f"r{i % 20}", skill="pick", params={}) for i in range(60)]
+    view.apply(Planned(task_id="t-1", seq=2, stamp=0.0, steps=steps))
+    seq = 3
+    for i in range(50):  # steps 40..49 run (on r0..r9), 50..59 wait, step 7 failed
+        agent = f"r{i % 20}"
+        view.apply(StepStarted(task_id="t-1", seq=seq, stamp=1.0, step=i, agent=agent,
+                               skill="pick", run_id=str(i)))  # fmt: skip
+        if i < 40:
+            view.apply(StepFinished(task_id="t-1", seq=seq + 1, stamp=2.0, step=i, agent=agent,
+                                    skill="pick", success=i != 7, reason="slipped"))  # fmt: skip
+        seq += 2
+    out = io.StringIO()
+    Console(file=out, width=100, force_terminal=False, color_system=None).print(
+        view.render(now=4.0, height=60)
+    )
+    text = out.getvalue()
+    assert len(text.splitlines()) <= 60, text
+    robots_part, plan_part = text.split("\nplan")
+    robot_rows = [line.split("│")[1].strip() for line in robots_part.splitlines() if "│" in line]
+    plan_rows = [line.split("│")[5].strip() for line in plan_part.splitlines() if "│" in line]
+    # The robots in a step first, in natural order (r2 before r10); the plan's failed and
+    # running steps, then the next waiting ones; no step done.
+    assert robot_rows == [f"r{i}" for i in range(len(robot_rows))], robot_rows
+    assert plan_rows[:11] == ["FAILED"] + ["running"] * 10 and "waiting" in plan_rows
+    assert "done" not in plan_rows
+    assert "robots not shown" in text and "steps not shown: 39 done" in text
+    # Everything fits without a height: 60 plan rows.
+    out = io.StringIO()
+    Console(file=out, width=100, force_terminal=False, color_system=None).print(
+        view.render(now=4.0)
+    )
+    assert "not shown" not in out.getvalue()
 
 
 def test_pause_and_resume_are_shown_in_lines_and_in_the_live_view() -> None:
