@@ -170,7 +170,7 @@ def _command_in(argv: Sequence[str]) -> str | None:
 
 #: The long-running commands: the INFO lines of their own loggers (ready, stopped, ...) show by
 #: default; a client command shows warnings and errors only.
-_SERVICES = frozenset({"router", "wm", "sim", "agent", "task-agent"})
+_SERVICES = frozenset({"router", "wm", "sim", "agent", "task-agent", "eventlog", "monitor"})
 _SERVICE_LOGGERS = ("skimesh", "skill_agent.server", "task_agent.service", "task_agent.operator")
 
 

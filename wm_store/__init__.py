@@ -77,6 +77,7 @@ if TYPE_CHECKING:
     from ._replica import ReplicaStats as ReplicaStats
     from ._transport import InMemoryTransport as InMemoryTransport
     from ._transport import WmTransport as WmTransport
+    from ._transport import wait_for_store as wait_for_store
     from ._zenoh_transport import ZenohTransport as ZenohTransport
     from .scene._names import display_name as display_name
 
@@ -95,6 +96,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "ReplicaStats": "._replica",
         "InMemoryTransport": "._transport",
         "WmTransport": "._transport",
+        "wait_for_store": "._transport",
         "ZenohTransport": "._zenoh_transport",
         "display_name": ".scene._names",
     },
@@ -141,4 +143,5 @@ __all__ = [
     "registration_ops",
     "transact_in_batches",
     "unregistration_ops",
+    "wait_for_store",
 ]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import subprocess
 import sys
@@ -12,6 +13,7 @@ from pathlib import Path
 
 import msgspec
 
+from benchmarks.cli._site import loopback_site
 from benchmarks.common import (
     ROOT,
     Row,
@@ -21,6 +23,7 @@ from benchmarks.common import (
     machine_info,
     summarize,
 )
+from meshlink.testing import free_port
 
 __all__ = ["COMMANDS", "main", "measure"]
 
@@ -34,6 +37,16 @@ COMMANDS: Mapping[str, Sequence[str]] = {
     "skimesh --help": ["-m", "skimesh", "--help"],
     "skimesh --version": ["-m", "skimesh", "--version"],
     "skimesh agents --help": ["-m", "skimesh", "agents", "--help"],
+}
+
+#: The light commands that ask a live mesh (``_site``), by figure name: their arguments (the
+#: connection flags follow) and their exit code (a task id nobody has: refused, after the task
+#: agent's answer).
+CONNECTED: Mapping[str, tuple[Sequence[str], int]] = {
+    "skimesh agents": (["-m", "skimesh", "agents"], 0),
+    "skimesh skills r1": (["-m", "skimesh", "skills", "r1"], 0),
+    "skimesh wm get Gear-1": (["-m", "skimesh", "wm", "get", "Gear-1"], 0),
+    "skimesh task status t-none": (["-m", "skimesh", "task", "status", "t-none"], 2),
 }
 
 HEAVY = ("unified_planning", "mujoco", "placo", "rerun", "rdflib")
@@ -53,12 +66,15 @@ def _env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{path}" if path else str(ROOT)}
 
 
-def _once(args: Sequence[str]) -> float:
+def _once(args: Sequence[str], code: int = 0) -> float:
     started = time.perf_counter()
-    subprocess.run(
-        [sys.executable, *args], cwd=ROOT, env=_env(), capture_output=True, check=True, timeout=60
+    done = subprocess.run(
+        [sys.executable, *args], cwd=ROOT, env=_env(), capture_output=True, timeout=60
     )
-    return time.perf_counter() - started
+    took = time.perf_counter() - started
+    if done.returncode != code:
+        raise RuntimeError(f"{args}: exit {done.returncode}, not {code}\n{done.stderr!r}")
+    return took
 
 
 def heavy_imports(args: Sequence[str]) -> list[str]:
@@ -75,14 +91,19 @@ def heavy_imports(args: Sequence[str]) -> list[str]:
     return list(msgspec.json.decode(line[6:].replace("'", '"')))
 
 
-def measure(runs: int) -> dict[str, Stats]:
-    """Wall seconds of each command over ``runs`` rounds, the commands in turn in each round."""
-    for args in COMMANDS.values():  # warm the file cache and the bytecode once
-        _once(args)
-    samples: dict[str, list[float]] = {name: [] for name in COMMANDS}
+def measure(
+    runs: int, connected: Mapping[str, tuple[Sequence[str], int]] | None = None
+) -> dict[str, Stats]:
+    """Wall seconds of each command over ``runs`` rounds, the commands in turn in each round;
+    with ``connected`` (arguments with their connection flags, and exit codes), those too."""
+    commands = {name: (args, 0) for name, args in COMMANDS.items()}
+    commands.update(connected or {})
+    for args, code in commands.values():  # warm the file cache and the bytecode once
+        _once(args, code)
+    samples: dict[str, list[float]] = {name: [] for name in commands}
     for _ in range(runs):
-        for name, args in COMMANDS.items():
-            samples[name].append(_once(args))
+        for name, (args, code) in commands.items():
+            samples[name].append(_once(args, code))
     return {name: summarize(values) for name, values in samples.items()}
 
 
@@ -113,13 +134,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="5 runs of each command (< 15 s)")
     parser.add_argument("--runs", type=int, default=15, help="runs of each command (default 15)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="also write results as JSON")
+    parser.add_argument(
+        "--offline", action="store_true", help="leave out the commands that ask a live mesh"
+    )
     args = parser.parse_args(argv)
     runs = 5 if args.quick else args.runs
     info = machine_info(("msgspec", "eclipse-zenoh"))
     load_start = load_average()
     started = time.perf_counter()
-    stats = measure(runs)
-    heavy = {name: heavy_imports(cmd) for name, cmd in COMMANDS.items() if name != BASELINE}
+    with contextlib.ExitStack() as stack:
+        connected: dict[str, tuple[Sequence[str], int]] = {}
+        if not args.offline:
+            flags = stack.enter_context(loopback_site(free_port(), f"cli-{os.getpid()}"))
+            connected = {name: ([*a, *flags], code) for name, (a, code) in CONNECTED.items()}
+        stats = measure(runs, connected)
+        every = {
+            **{n: list(a) for n, a in COMMANDS.items()},
+            **{n: a for n, (a, _) in connected.items()},
+        }
+        heavy = {name: heavy_imports(cmd) for name, cmd in every.items() if name != BASELINE}
     rows = make_rows(stats, heavy)
     print("machine: " + ", ".join(f"{k} {v}" for k, v in info.items()))
     print(

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
 from meshlink import Mesh, mesh_config_from_args, open_mesh
-from wm_store import WmClient, ZenohTransport
+from wm_store import TransportError, WmClient, ZenohTransport, wait_for_store
 
 from ..errors import UsageError
 
-__all__ = ["mesh_session", "read_terms", "wm_session"]
+__all__ = ["mesh_session", "read_terms", "store_answers", "wm_session"]
+
+_log = logging.getLogger("skimesh")
 
 
 @asynccontextmanager
@@ -35,6 +38,26 @@ async def wm_session(args: argparse.Namespace, *, author: str = "cli") -> AsyncI
         WmClient.connect(ZenohTransport(mesh), author=author, timeout=args.timeout) as client,
     ):
         yield client
+
+
+async def store_answers(mesh: Mesh, who: str, *, timeout: float) -> None:
+    """Wait for the world-model store, saying so every 30 s: a service (an agent, the task
+    agent, the event log, the monitor) started before ``skimesh wm`` waits for it, as a ROS 2
+    node waits for a service; Ctrl-C stops the wait."""
+
+    def say(waited: float, error: TransportError) -> None:
+        _log.info(
+            "%s: waiting for the world-model store on mesh %r (%.0f s so far; start `skimesh "
+            "wm` on this mesh, or check the ACL): %s",
+            who,
+            mesh.keys.mesh,
+            waited,
+            error,
+        )
+
+    waited = await wait_for_store(ZenohTransport(mesh), timeout=timeout, say=say)
+    if waited > 1.0:
+        _log.info("%s: the world-model store answers (after %.0f s)", who, waited)
 
 
 def read_terms(files: list[str]) -> list[tuple[str, str]]:

@@ -102,12 +102,15 @@ def _add_read_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]
     get = _command(
         cmds,
         "get",
-        "show elements by id, as JSON",
+        "show elements by id or label, as JSON",
         "Prints a JSON list with every field of each element (type, label, properties, "
-        "observations, revision). Fails naming any id the world model does not have.",
+        "observations, revision). A label stands for the one element it names; fails naming "
+        "any name the world model does not have, and the elements a shared label names.",
         json_help=None,
     )
-    get.add_argument("ids", nargs="+", metavar="ID", help="element id, e.g. Gear-1")
+    get.add_argument(
+        "ids", nargs="+", metavar="ID", help="element id (Gear-1) or a label only it has (r1-arm)"
+    )
     get.set_defaults(func=_get)
 
     tree = _command(
@@ -237,7 +240,8 @@ def _element(wm: WmClient, element_id: str) -> Element:
 
 def _get(args: argparse.Namespace) -> int:
     """``wm get``: one read from the store, no replica (no snapshot, no ontology: start-up
-    time); an unknown id names the closest ids the store has."""
+    time). A name that is no id but one element's label gets that element (``wm get r1``); an
+    unknown name, or a label several elements share, is refused naming the candidates."""
 
     async def main() -> int:
         async with mesh_session(args) as mesh:
@@ -246,14 +250,51 @@ def _get(args: argparse.Namespace) -> int:
             if isinstance(reply, ElementsReply):
                 return await _print_json(reply.elements)
             listing = await transport.request(Resolve(query=Query()), timeout=args.timeout)
-        known = [e.id for e in listing.elements] if isinstance(listing, ElementsReply) else []
-        missing = [i for i in args.ids if i not in known]
-        if not known or not missing:  # the store's own error (an ACL, a fault)
+            known = listing.elements if isinstance(listing, ElementsReply) else []
+            ids = _by_label(args.ids, known)
+            if ids is not None and ids != args.ids:
+                reply = await transport.request(GetElements(ids=ids), timeout=args.timeout)
+                if isinstance(reply, ElementsReply):
+                    return await _print_json(reply.elements)
+        if not known or ids is not None:  # the store's own error (an ACL, a fault)
             raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
-        said = [f"no element {i!r} in the world model{did_you_mean(i, known)}" for i in missing]
-        raise ElementNotFoundError("; ".join(said))
+        raise ElementNotFoundError("; ".join(_unknown(args.ids, known)))
 
     return run_service(main)
+
+
+def _by_label(names: list[str], known: list[Element]) -> list[str] | None:
+    """Each name as an id: itself where it is one, else the id of the one element it labels;
+    None when a name is neither, or labels several elements."""
+    ids = {e.id for e in known}
+    out = []
+    for name in names:
+        labelled = [e.id for e in known if e.label == name]
+        if name in ids:
+            out.append(name)
+        elif len(labelled) == 1:
+            out.append(labelled[0])
+        else:
+            return None
+    return out
+
+
+def _unknown(names: list[str], known: list[Element]) -> list[str]:
+    """Why each name that is neither an id nor a unique label is refused, with the closest
+    ids and labels."""
+    ids = {e.id for e in known}
+    said = []
+    for name in names:
+        labelled = sorted((e.id for e in known if e.label == name), key=id_sort_key)
+        if name in ids or len(labelled) == 1:
+            continue
+        if labelled:
+            said.append(f"{len(labelled)} elements are labelled {name!r}: give one's id "
+                        f"({', '.join(labelled)})")  # fmt: skip
+            continue
+        names_known = sorted(ids | {e.label for e in known if e.label})
+        said.append(f"no element {name!r} in the world model{did_you_mean(name, names_known)}")
+    return said
 
 
 def _client(args: argparse.Namespace, body: Body) -> int:

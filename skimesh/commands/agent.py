@@ -36,7 +36,7 @@ from wm_store.protocol import Value
 from ..errors import Exit, SkimeshError, complain
 from ..runtime import run_service
 from . import _runs as runs_command
-from ._connect import mesh_session
+from ._connect import mesh_session, store_answers
 from ._run_view import RunLines, with_output
 from ._store_reads import registered_agents
 from ._table import print_table
@@ -252,6 +252,8 @@ def _serve(args: argparse.Namespace) -> int:
         try:
             async with AsyncExitStack() as stack:
                 mesh = await stack.enter_async_context(mesh_session(args))
+                who = "agent " + ", ".join(c.name for c in configs)
+                await store_answers(mesh, who, timeout=args.timeout)
                 wm = None
                 if len(configs) > 1:  # the agents of one process share one replica
                     transport = ZenohTransport(mesh)

@@ -23,7 +23,7 @@ import anyio
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
 
 from ..runtime import run_service
-from ._connect import mesh_session
+from ._connect import mesh_session, store_answers
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator
@@ -111,6 +111,8 @@ def _serve(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         async with open_mesh(mesh_config_from_args(args)) as mesh, anyio.create_task_group() as tg:
+            if not args.no_wm:
+                await store_answers(mesh, "event log", timeout=args.timeout)
             serve = functools.partial(
                 serve_event_log,
                 mesh,
@@ -119,7 +121,7 @@ def _serve(args: argparse.Namespace) -> int:
                 wm_timeout=args.timeout,
             )
             await tg.start(serve)
-            _log.warning("event log ready on mesh %r: %s", mesh.keys.mesh, args.data)
+            _log.info("event log ready on mesh %r: %s", mesh.keys.mesh, args.data)
         return 0
 
     return run_service(main)

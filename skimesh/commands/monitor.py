@@ -31,6 +31,7 @@ import anyio
 from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
 
 from ..runtime import run_service
+from ._connect import store_answers
 
 if TYPE_CHECKING:
     from mujoco_sim.recording import Recorder
@@ -138,12 +139,13 @@ def _run(args: argparse.Namespace) -> int:
     async def main() -> int:
         try:
             async with open_mesh(mesh_config_from_args(args)) as mesh:
+                await store_answers(mesh, "monitor", timeout=args.timeout)
                 async with anyio.create_task_group() as tg:
                     started = partial(run_monitor, mesh, options, recorder, say=say)
                     monitor: Monitor = await tg.start(started)
                     for line in lines:
                         say(line)
-                    _log.warning(  # a lone service says it is up (as the others do)
+                    _log.info(  # a service says it is up (as the others do)
                         "monitor ready: scenario %s, mesh %s", scenario.name, mesh.config.mesh
                     )
                     if args.duration is not None:

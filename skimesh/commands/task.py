@@ -50,7 +50,7 @@ from ..errors import Exit, complain, exit_code
 from ..runtime import run_service
 from . import _plan as plan_command
 from . import operator as operator_command
-from ._connect import mesh_session, wm_session
+from ._connect import mesh_session, store_answers, wm_session
 from ._render import plain_help
 from ._table import print_table
 from ._task_output import ProgressPrinter, info_lines, print_json, print_problems
@@ -350,21 +350,19 @@ def _serve(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         try:
-            async with (
-                mesh_session(args) as mesh,
-                WmClient.connect(
+            async with mesh_session(args) as mesh:
+                await store_answers(mesh, "task agent", timeout=args.timeout)
+                async with WmClient.connect(
                     ZenohTransport(mesh), author="task-agent", timeout=args.timeout
-                ) as wm,
-            ):
-                operator = None if args.no_operator else args.operator
-                await serve_tasks(  # until cancelled
-                    mesh,
-                    wm,
-                    operator=operator,
-                    grace=args.grace,
-                    durations=args.durations,
-                    preemption=not args.no_preemption,
-                )
+                ) as wm:
+                    await serve_tasks(  # until cancelled
+                        mesh,
+                        wm,
+                        operator=None if args.no_operator else args.operator,
+                        grace=args.grace,
+                        durations=args.durations,
+                        preemption=not args.no_preemption,
+                    )
         except (WmError, MeshlinkError) as e:
             print(f"skimesh task-agent: {e}", file=sys.stderr)
             return exit_code(e)

@@ -26,6 +26,9 @@ pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.timeout(300)]
 ON_THE_MESH: list[tuple[str, Exit, str]] = [
     ("wm get Gear-1", Exit.OK, ""),
     ("wm get Gear-11", Exit.REFUSED, "did you mean 'Gear-1'"),
+    ("wm get r1-arm", Exit.OK, '"id": "Arm-1"'),
+    ("wm get r1", Exit.REFUSED, "2 elements are labelled 'r1': give one's id"),
+    ("wm get r1-amr", Exit.REFUSED, "did you mean 'r1-arm'"),
     ("wm ls Gaer", Exit.REFUSED, "did you mean 'Gear'"),
     ("wm query Gear --label nothing-like-this", Exit.FAILED, ""),
     ("wm update Gear-1", Exit.REFUSED, "nothing to change"),
