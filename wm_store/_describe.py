@@ -11,10 +11,10 @@ and words each change against that::
     rev 9 by cli: gear-y (Gear-2) label "gear-z" -> "gear-y", mass 0.12 -> 0.2; removed Bolt-3
 
 ``+X [Type]`` is an element the change added; ``put X [Type]`` one this reader had not seen
-(without the state before the change it cannot tell an addition from an update); an update
-names the properties it changed, with old -> new for the first few; ``seen`` stands for new
-observations and a new ``seenAt``. :func:`describe_change` words one change with no prior
-knowledge.
+(without the state before the change, or after a gap in the revisions it was given, it cannot
+tell an addition from an update); an update names the properties it changed, with old -> new
+for the first few; ``seen`` stands for new observations and a new ``seenAt``.
+:func:`describe_change` words one change with no prior knowledge.
 """
 
 from __future__ import annotations
