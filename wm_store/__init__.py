@@ -11,7 +11,8 @@ This face is the client's API and the package's errors::
   and robot registration (:class:`RobotRegistration`, :class:`DeviceSpec`, :class:`SkillSpec`);
 - every exception: all derive from :class:`WmError`, each with a stable wire ``code``;
 - :func:`display_name`: how plans, progress, output and errors name an element (its label,
-  with its id where the two differ).
+  with its id where the two differ); :class:`ChangeWords` and :func:`describe_change`: a
+  committed change in words (what an update changed, against the elements before it).
 
 The concepts, each a sub-package whose face is the public path of its names (pure core first,
 adapters last)::
@@ -67,6 +68,7 @@ from ._lazy import lazy_getattr
 if TYPE_CHECKING:
     from ._batches import transact_in_batches as transact_in_batches
     from ._client import WmClient as WmClient
+    from ._describe import ChangeWords as ChangeWords
     from ._describe import describe_change as describe_change
     from ._registration import DeviceSpec as DeviceSpec
     from ._registration import RobotRegistration as RobotRegistration
@@ -86,6 +88,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
     {
         "transact_in_batches": "._batches",
         "WmClient": "._client",
+        "ChangeWords": "._describe",
         "describe_change": "._describe",
         "DeviceSpec": "._registration",
         "RobotRegistration": "._registration",
@@ -105,6 +108,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
 
 __all__ = [
     "CardinalityError",
+    "ChangeWords",
     "ConflictError",
     "CorruptLogError",
     "DeviceSpec",

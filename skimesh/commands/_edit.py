@@ -1,8 +1,10 @@
 """The editing and following sub-commands of ``skimesh wm``: ``add``, ``update``,
 ``remove``, ``relate``, ``unrelate`` write the world model (one transaction each, checked by
 the store as any write: the ontology's classes, properties, domains, cardinalities, the scene
-tree, unique names); ``watch`` prints every change as it is committed, in words; ``history``
-prints the changes since a revision (those the store still keeps).
+tree, unique names); ``watch`` prints every change as it is committed, in words (what each
+update changed, against the state before it: :class:`~wm_store.ChangeWords`); ``history``
+prints the changes since a revision (those the store still keeps), learning the elements as
+it goes.
 
 Values given as ``PROP=VALUE`` are JSON (typed values such as poses, lists) or a number,
 ``true``/``false`` or text.
@@ -16,7 +18,7 @@ from collections.abc import Awaitable, Callable
 
 import msgspec
 
-from wm_store import WmClient, describe_change, display_name
+from wm_store import ChangeWords, WmClient, display_name
 from wm_store.protocol import (
     AddElement,
     Change,
@@ -174,23 +176,28 @@ async def _unrelate(args: argparse.Namespace, wm: WmClient) -> int:
     return 0
 
 
-def _line(change: Change, wm: WmClient, as_json: bool) -> str:
+def _line(change: Change, wm: WmClient, words: ChangeWords, as_json: bool) -> str:
+    """The change as JSON, or in words against what ``words`` knew before it (elements it
+    never saw named as the replica names them)."""
     if as_json:
         return msgspec.json.encode(change).decode()
-    return describe_change(change, lambda i: display_name(wm.find_element(i), i))
+    return words(change, lambda i: display_name(wm.find_element(i), i))
 
 
 async def _watch(args: argparse.Namespace, wm: WmClient) -> int:
     print(f"# world model at revision {wm.revision}; following (Ctrl-C stops)", file=sys.stderr)
     async with wm.watch() as changes:
+        # the stream holds the changes after this point; the replica runs ahead of them
+        words = ChangeWords(wm.replica.state.elements.values(), revision=wm.revision)
         async for change in changes:
-            print(_line(change, wm, args.json), flush=True)
+            print(_line(change, wm, words, args.json), flush=True)
     return 0
 
 
 async def _history(args: argparse.Namespace, wm: WmClient) -> int:
     reply = await wm.request(ChangesSince(revision=max(0, args.since)))
     assert isinstance(reply, ChangesReply)
+    words = ChangeWords()  # the state before --since is not known: learnt change by change
     for change in reply.changes:
-        print(_line(change, wm, args.json))
+        print(_line(change, wm, words, args.json))
     return 0

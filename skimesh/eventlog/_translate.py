@@ -4,8 +4,10 @@ One translator follows a whole site. It ties each skill run to its task (from th
 ``StepStarted``, which names the run), keeps only changes of a run's or a step's state (a
 progress report that repeats the last one's state and message is no event), and turns the
 periodic device states into transitions (a base starts or stops moving, a gripper takes or
-lets go of something, a door opens, heating starts). Its memory is bounded: the tasks of the
-newest :data:`RUNS_KEPT` runs, the steps and runs in flight, one state per device.
+lets go of something, a door opens, heating starts), and words each world-model change against
+the elements before it (:class:`~wm_store.ChangeWords`). Its memory is bounded: the tasks of the
+newest :data:`RUNS_KEPT` runs, the steps and runs in flight, one state per device, the last
+version of each element.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ from task_agent.protocol import (
     TaskResumed,
     TaskStarted,
 )
-from wm_store import describe_change
+from wm_store import ChangeWords
 from wm_store.protocol import Change
 
 from ._records import EventRecord
@@ -69,6 +71,8 @@ class Translator:
         self._runs_of_task: dict[str, dict[int, str]] = {}
         self._last_state: dict[tuple[str, str], tuple[str, str]] = {}
         self._devices: dict[tuple[str, str], tuple[object, ...]] = {}
+        self._words = ChangeWords()
+        """The last element of each id the world-model changes put (what an update changed)."""
         self.learnt: list[tuple[str, str]] = []
         """(run, task) pairs learnt from ``StepStarted`` and not yet taken by the store: a
         run's own entries may arrive before the step that names it (another publisher)."""
@@ -215,14 +219,15 @@ class Translator:
             stamp=stamp, kind="agent", event=event, robot=agent, text=f"agent {agent} {event}"
         )
 
-    @staticmethod
-    def change(change: Change, name_of: Callable[[str], str] = str) -> EventRecord:
+    def change(self, change: Change, name_of: Callable[[str], str] | None = None) -> EventRecord:
+        """A committed change in words, against the elements the changes before it left
+        (learnt from them, in revision order); ``name_of`` names elements not seen yet."""
         return EventRecord(
             stamp=change.stamp,
             kind="wm",
             event="change",
             robot=change.author,
-            text=describe_change(change, name_of),
+            text=self._words(change, name_of),
             data=_data(change),
         )
 

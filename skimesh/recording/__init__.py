@@ -2,8 +2,8 @@
 
 - :class:`MissionRecording` logs task events, the plan, each robot's active skill and progress
   and every world-model change into the world's recording stream (:class:`CallText`,
-  :func:`step_text`: the lines it writes; :func:`wm_store.describe_change` words the
-  world-model changes);
+  :func:`step_text`: the lines it writes; :class:`wm_store.ChangeWords` words the
+  world-model changes, each against the state before it);
 - :class:`MissionFeed` fills it from the mesh: every task's events (the running ones from
   their kept history first) and every agent's event log; ``skimesh demo`` and ``skimesh
   monitor`` both record through it;

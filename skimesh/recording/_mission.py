@@ -14,7 +14,8 @@ skills' code. Entities::
                              one row per agent, its steps left to right in planned order
     robots/<robot>/skill     TextLog: the robot's active skill, its progress messages, results
     robots/<robot>/progress  Scalars: fraction done of its active step (0..1)
-    world_model/changes      TextLog: one line per committed transaction (revision + summary)
+    world_model/changes      TextLog: one line per committed transaction (revision, author, what
+                             it changed: +Gear-9 [Gear], Gear-1 pose (..) -> (..), removed X)
     belief/<label>           Boxes3D: where the world model believes each object is
                              (:class:`BeliefLayer`, once :meth:`MissionRecording.follow_beliefs`)
     agents/<agent>/events    TextLog: the agent's event log: runs started, results, refused
@@ -51,7 +52,7 @@ from task_agent.protocol import (
     TaskFinished,
     TaskStarted,
 )
-from wm_store import describe_change
+from wm_store import ChangeWords
 from wm_store.protocol import (
     Change,
     Value,
@@ -128,6 +129,9 @@ class MissionRecording:
         self._steps: dict[tuple[str, int], str] = {}
         self.beliefs: BeliefLayer | None = None
         self._state: Callable[[], SceneState] | None = None
+        self._words = ChangeWords()
+        """What the changes put (learnt, or known from the replica once :meth:`follow_beliefs`
+        gives it): the changes are worded against it (what an update changed)."""
         self.agents = AgentEventLines(
             rec,
             sim_clock=sim_clock,
@@ -154,17 +158,21 @@ class MissionRecording:
 
     def wm_change(self, change: Change) -> None:
         """One world-model change (call it from the client's change callback, which runs
-        after the replica applied it): its line, and the ghosts it moved."""
+        after the replica applied it): its line (what it changed, against the changes before
+        it), and the ghosts it moved."""
         self._now()
-        self.rec.log("world_model/changes", rr.TextLog(describe_change(change, self.label_of)))
+        self.rec.log("world_model/changes", rr.TextLog(self._words(change, self.label_of)))
         if self.beliefs is not None and self._state is not None:
             self.beliefs.update(self._state())
 
     def follow_beliefs(self, labels: Iterable[str], state: Callable[[], SceneState]) -> None:
         """From now on, show where the world model (``state()``: the replica's state) believes
         the elements labelled ``labels`` are (:class:`BeliefLayer`); logs them now, then after
-        every change :meth:`wm_change` sees."""
+        every change :meth:`wm_change` sees. The changes after this are worded against
+        ``state()``'s elements (the replica holds the changes :meth:`wm_change` saw)."""
         self.beliefs, self._state = BeliefLayer(self.rec, labels), state
+        scene = state()
+        self._words.seed(scene.elements.values(), scene.revision)
         self._now()
         self.beliefs.update(state())
 

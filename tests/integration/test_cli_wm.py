@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import queue
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -287,8 +289,10 @@ def test_writes_watch_and_history_from_the_command_line(
     store = start_store(router_endpoint, mesh_name, tmp_path / "wm")
     common = ["--connect", router_endpoint, "--mesh", mesh_name]
     watch = Child(["-m", "skimesh", "wm", *common, "watch", "--json"], name="watch")
+    words = Child(["-m", "skimesh", "wm", *common, "watch"], name="watch-words")
     try:
         watch.wait_stderr("following")
+        words.wait_stderr("following")
         box = skimesh("wm", *common, "add", "Box", "--label", "bin-a")
         assert box.returncode == 0, box.stderr
         box_id = box.stdout.strip()
@@ -311,6 +315,13 @@ def test_writes_watch_and_history_from_the_command_line(
             assert done.returncode == 0 and "revision" in done.stdout, done.stderr
         got = json.loads(skimesh("wm", *common, "get", gear_id).stdout)[0]
         assert got["label"] == "gear-y" and got["properties"]["mass"] == 0.2
+        # in words, against the state before each change
+        added = _line_with(words, f"gear-z ({gear_id})")
+        assert added.startswith("rev 2 by cli: +gear-z") and "[Gear]" in added, added
+        updated = _line_with(words, "mass")
+        assert updated == (
+            f'rev 3 by cli: gear-y ({gear_id}) label "gear-z" -> "gear-y", mass 0.12 -> 0.2'
+        )
 
         wrong = skimesh("wm", *common, "update", gear_id, "--set", "mass=-1")
         assert wrong.returncode != 0 and "mass" in wrong.stderr, "checked as any write"
@@ -320,10 +331,26 @@ def test_writes_watch_and_history_from_the_command_line(
         history = skimesh("wm", *common, "history", "--since", "1")
         lines = history.stdout.strip().splitlines()
         assert history.returncode == 0 and len(lines) == 4, history.stdout
-        assert lines[0].startswith("rev 2 by cli: put gear-z") and "+near" in lines[2]
+        assert lines[0].startswith("rev 2 by cli: +gear-z") and "+near" in lines[2]
+        assert lines[1] == updated, "history learns the gear from revision 2"
         removed = skimesh("wm", *common, "remove", box_id, "--branch")
         assert removed.returncode == 0, removed.stderr
         assert skimesh("wm", *common, "get", gear_id).returncode != 0, "removed with its box"
     finally:
+        words.stop()
         watch.stop()
         assert store.stop() == 0, store.log()
+
+
+def _line_with(child: Child, needle: str, timeout: float = 30.0) -> str:
+    """The next line ``child`` printed that contains ``needle`` (the lines before it read)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            line = child.stdout.get(timeout=max(0.1, deadline - time.monotonic()))
+        except queue.Empty:
+            raise AssertionError(f"{child.name}: no {needle!r} in {timeout} s") from None
+        if line is None:
+            raise AssertionError(f"{child.name} ended early:\n{child.log()}")
+        if needle in line:
+            return line.rstrip("\n")

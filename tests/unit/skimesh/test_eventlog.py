@@ -178,16 +178,16 @@ def test_device_states_become_transitions_only() -> None:
     assert held is not None and "holding Gear-1" in held.text
 
 
-def test_a_world_model_change_is_worded_with_display_names() -> None:
-    change = Change(
-        revision=4,
-        deltas=[ElementPut(element=Element(id="e-1", type="Gear", label="Gear-1"))],
-        stamp=9.0,
-        author="r1",
-    )
-    r = Translator.change(change)
+def test_a_world_model_change_is_worded_against_the_changes_before_it() -> None:
+    t = Translator()
+    gear = Element(id="Gear-1", type="Gear", label="gear", properties={"mass": 0.1})
+    change = Change(revision=4, deltas=[ElementPut(element=gear)], stamp=9.0, author="r1")
+    r = t.change(change)
     assert (r.kind, r.robot, r.stamp) == ("wm", "r1", 9.0)
-    assert "Gear-1" in r.text and "rev 4" in r.text
+    assert r.text == "rev 4 by r1: put gear (Gear-1) [Gear]", "not seen before: new or not"
+    heavier = Element(id="Gear-1", type="Gear", label="gear", properties={"mass": 0.25})
+    change = Change(revision=5, deltas=[ElementPut(element=heavier)], stamp=9.5, author="cli")
+    assert t.change(change).text == "rev 5 by cli: gear (Gear-1) mass 0.1 -> 0.25"
 
 
 # --------------------------------------------------------------------------- time and export

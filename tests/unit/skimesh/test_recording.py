@@ -29,7 +29,16 @@ from task_agent.protocol import (
 )
 from tests.unit.wm_store.stores import memory_client
 from wm_store import WmClient, describe_change
-from wm_store.protocol import Change, Element, ElementPut, ElementRemoved, Relation, RelationAdded
+from wm_store.protocol import (
+    Change,
+    Element,
+    ElementPut,
+    ElementRemoved,
+    Pose,
+    Position,
+    Relation,
+    RelationAdded,
+)
 
 ROOT = Path(__file__).resolve().parents[3]
 LABELS = {"KitBox-1": "kit", "Gear-1": "gear"}
@@ -51,7 +60,7 @@ def test_a_change_is_one_line_with_its_revision_and_author() -> None:
         ],
     )
     assert describe_change(change, label_of) == (
-        "rev 42 by r1: put gear, +contain(kit, gear), removed Bolt-9"
+        "rev 42 by r1: put gear (Gear-1) [Gear]; +contain(kit, gear (Gear-1)); removed Bolt-9"
     )
     many = Change(
         revision=1,
@@ -59,7 +68,7 @@ def test_a_change_is_one_line_with_its_revision_and_author() -> None:
         stamp=0.0,
         deltas=[ElementPut(element=Element(id=f"Gear-{i}", type="Gear")) for i in range(9)],
     )
-    assert describe_change(many, label_of) == "rev 1 by demo: 9 deltas (9 put)"
+    assert describe_change(many, label_of) == "rev 1 by demo: 9 deltas (9 new)", "from empty"
 
 
 @pytest.fixture
@@ -96,6 +105,30 @@ async def test_calls_leave_out_hardware_and_defaults(wm: WmClient) -> None:
     assert text("r1", "pick", params) == "pick(object=Gear-1, holder=PartBox-1, approach=0.2)"
     assert text("r9", "pick", {"object": ids["Gear-1"]}) == "pick(object=Gear-1)"  # unknown
     assert step_text("heat", {"duration": 45.0}, labels) == "heat(duration=45.0)"
+
+
+@pytest.mark.anyio
+async def test_the_changes_panel_says_what_an_update_changed(wm: WmClient, tmp_path: Path) -> None:
+    """Seeded from the replica by ``follow_beliefs``, a change is worded against the state
+    before it: the pose from -> to, not the element put again."""
+    start = Pose(Position(1.0, 0.5, 0.7))
+    gear = await wm.add_element("Gear", label="gear-z", properties={"pose": start})
+    path = tmp_path / "changes.rrd"
+    rec = rr.RecordingStream("skimesh-test")
+    rec.set_sinks(rr.FileSink(str(path)))
+    recording = MissionRecording(rec, sim_clock=lambda: 0.0, label_of=str)
+    wm.on_change(recording.wm_change)
+    recording.follow_beliefs([], lambda: wm.replica.state)
+    await wm.update_element(gear, {"pose": Pose(Position(0.445, -0.9981, 0.37))})
+    box = await wm.add_element("Box", label="bin")
+    rec.flush()
+    rec.disconnect()
+    lines = _texts(path)["/world_model/changes"]
+    assert [line.split(": ", 1)[1] for line in lines] == [
+        f"gear-z ({gear}) pose (1.000, 0.500, 0.700) -> (0.445, -0.998, 0.370)",
+        f"+bin ({box}) [Box]",
+    ]
+    assert lines[0].startswith("rev 2 by ")
 
 
 def _events() -> list[TaskEvent]:
