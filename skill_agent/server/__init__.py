@@ -39,6 +39,7 @@ published, then, shielded, the agent unregisters and the token is undeclared.
 from ._history import RunHistory as RunHistory
 from ._publisher import RunEventPublisher as RunEventPublisher
 from ._service import AgentService as AgentService
+from ._serving import FindDevices as FindDevices
 from ._serving import agent_registration as agent_registration
 from ._serving import run_agent as run_agent
 from ._serving import serve_agent as serve_agent
@@ -46,6 +47,7 @@ from ._serving import simulated_outcomes as simulated_outcomes
 
 __all__ = [
     "AgentService",
+    "FindDevices",
     "RunEventPublisher",
     "RunHistory",
     "agent_registration",

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import logging
 import socket
-from collections.abc import AsyncIterator, Mapping
+from collections.abc import AsyncIterator, Awaitable, Callable, Mapping, Sequence
 from contextlib import asynccontextmanager
 from pathlib import Path
 
@@ -31,7 +31,19 @@ from skill_agent.server._publisher import RunEventPublisher
 from skill_agent.server._service import AgentService
 from wm_store import DeviceSpec, RobotRegistration, SkillSpec, WmClient, WmError, ZenohTransport
 
-__all__ = ["agent_registration", "run_agent", "serve_agent", "simulated_outcomes"]
+__all__ = [
+    "FindDevices",
+    "agent_registration",
+    "run_agent",
+    "serve_agent",
+    "simulated_outcomes",
+]
+
+FindDevices = Callable[[Sequence[str]], Awaitable[Mapping[str, object]]]
+"""Drivers of those of the given device labels that are served now (the others left out)."""
+
+LATE_POLL_MAX = 10.0
+"""Seconds between two looks for devices not served yet, at most (from 1 s, doubling)."""
 
 _log = logging.getLogger(__name__)
 _json = msgspec.json.Encoder()
@@ -103,12 +115,16 @@ async def serve_agent(
     wm: WmClient,
     registry: SkillRegistry | None = None,
     drivers: Mapping[str, object] | None = None,
+    find_devices: FindDevices | None = None,
     unregister_timeout: float = 5.0,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
 ) -> None:
     """Run ``core`` and serve it on ``mesh`` until cancelled (see the module docstring);
     ``started`` once the agent is registered, wired and reachable. ``drivers``: device
     drivers by world-model label; given, they replace ``core.devices`` (bound by label).
+    ``find_devices``: where devices of the config have no driver yet (an agent started before
+    the simulator or a device server), look for them now and then (every 1 s, doubling up to
+    :data:`LATE_POLL_MAX`) and bind each one found, until none is missing.
 
     Raises:
         WmError: the registration was refused or the store is unreachable.
@@ -116,6 +132,7 @@ async def serve_agent(
     """
     keys, name = mesh.keys, core.name
     address = keys.agent(name)
+    drivers = None if drivers is None else dict(drivers)  # late devices join this one
 
     async def reregister() -> None:
         await _register(wm, core, config, address, drivers)
@@ -146,6 +163,8 @@ async def serve_agent(
                 ", ".join(d.name for d in core.descriptions()),
                 ", simulated outcomes" if core.simulated is not None else "",
             )
+            if drivers is not None and find_devices is not None:
+                tg.start_soon(_late_devices, core, config, wm, drivers, find_devices)
             task_status.started()
     finally:
         unsubscribe()
@@ -164,6 +183,32 @@ async def serve_agent(
                         )
                 token.undeclare()
         _log.info("agent %s stopped", name)
+
+
+async def _late_devices(
+    core: AgentCore,
+    config: AgentConfig,
+    wm: WmClient,
+    drivers: dict[str, object],
+    find: FindDevices,
+) -> None:
+    """Bind the devices of ``config`` served after the agent started (see :func:`serve_agent`)."""
+    expected = list(dict.fromkeys([*(d.label for d in config.devices), *config.hardware.values()]))
+    pause = 1.0
+    while missing := [label for label in expected if label not in drivers]:
+        await anyio.sleep(pause)  # a device server that is not there gives no event
+        pause = min(LATE_POLL_MAX, pause * 2)
+        found = {k: v for k, v in (await find(missing)).items() if k in missing}
+        if not found:
+            continue
+        try:
+            bound = bind_devices(wm, found, found, robot=core.robot)
+        except WiringError as e:
+            _log.warning("agent %s: a device served now cannot be bound: %s", core.name, e)
+            return
+        drivers.update(found)
+        core.devices.update(bound)
+        _log.info("agent %s: devices served now: %s", core.name, ", ".join(sorted(found)))
 
 
 def _terms(config: AgentConfig, registry: SkillRegistry) -> list[tuple[str, str]]:
@@ -217,6 +262,7 @@ async def run_agent(
     *,
     simulate: bool = False,
     drivers: Mapping[str, object] | None = None,
+    find_devices: FindDevices | None = None,
     wm_timeout: float = 5.0,
     wm: WmClient | None = None,
     task_status: TaskStatus[None] = anyio.TASK_STATUS_IGNORED,
@@ -225,6 +271,7 @@ async def run_agent(
     build the core and serve it until cancelled. ``simulate`` forces simulated outcomes.
     ``drivers``: device drivers by world-model label (``driver.name``), bound to the agent's
     devices and hardware bindings by label (see the module doc); None: no drivers.
+    ``find_devices``: looks for the devices still without a driver (:func:`serve_agent`).
     ``wm``: a connected client of this process whose replica the agent shares (it writes as
     itself through :meth:`~wm_store.WmClient.with_author`): the agents of one process then
     receive, decode and apply each world-model change once, not once each: ``async with
@@ -259,5 +306,6 @@ async def run_agent(
                 wm=wm,
                 registry=registry,
                 drivers=drivers,
+                find_devices=find_devices,
                 task_status=task_status,
             )

@@ -17,7 +17,7 @@ import contextlib
 import json
 import logging
 import sys
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from contextlib import AsyncExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -237,11 +237,19 @@ def _serve(args: argparse.Namespace) -> int:
     async def serve(mesh: Mesh, config: AgentConfig, wm: WmClient | None) -> None:
         try:
             drivers = await _remote_drivers(mesh, config, args.device_timeout) if remote else None
+
+            async def served(labels: Sequence[str]) -> Mapping[str, object]:
+                from device_drivers.remote import connect_devices
+
+                found = await connect_devices(mesh, timeout=args.device_timeout)
+                return {d.name: d for d in found.values() if d.name in labels}
+
             await run_agent(
                 mesh,
                 config,
                 simulate=args.simulate,
                 drivers=drivers,
+                find_devices=served if remote else None,
                 wm_timeout=args.timeout,
                 wm=wm,
             )
@@ -298,8 +306,8 @@ async def _remote_drivers(mesh: Mesh, config: AgentConfig, timeout: float) -> di
     missing = [d.label for d in config.devices if d.label not in found]
     if missing:
         _log.warning(
-            "agent %s: no device server answered for %s (is `skimesh sim` running?); skills "
-            "that need them will fail",
+            "agent %s: no device server answered for %s (is `skimesh sim` running?); the "
+            "agent binds them once they are served, skills that need them fail until then",
             config.name,
             ", ".join(missing),
         )

@@ -1,14 +1,17 @@
-"""A site started by hand in any order: services that need the world model (a skill agent, the
-task agent, the event log) started before ``skimesh wm`` say they wait for it and come up once
-it answers, each in its own process, as a site runs them."""
+"""A site started by hand in any order, each service in its own process as a site runs them:
+services that need the world model (a skill agent, the task agent, the event log) started
+before ``skimesh wm`` say they wait for it and come up once it answers; an agent started before
+the simulator binds its devices once they are served."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from .procs import Child
+from .procs import ROOT, Child
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -51,3 +54,37 @@ def test_services_started_before_the_store_wait_for_it(
     finally:
         for child in children:
             child.kill()
+
+
+def test_an_agent_started_before_the_simulator_binds_its_devices_once_served(
+    router_endpoint: str, mesh_name: str, tmp_path: Path
+) -> None:
+    """The agent warns that its devices do not answer, binds them when ``skimesh sim`` serves
+    them, and a skill then runs on them in the physics."""
+    flags = ["--connect", router_endpoint, "--mesh", mesh_name]
+    children: list[Child] = []
+
+    def start(name: str, *args: str, ready: str) -> Child:
+        child = Child(["-m", "skimesh", *args, *flags], name=name)
+        children.append(child)
+        child.wait_stderr(ready, timeout=120)
+        return child
+
+    try:
+        start("wm", "wm", "--data", str(tmp_path / "wm"), "--scenario", "kitting",
+              ready="world model ready")  # fmt: skip
+        agent = start("agent", "agent", "--scenario", "kitting", "--robot", "r1",
+                      ready="agent r1 ready")  # fmt: skip
+        assert any("no device server answered for r1-arm" in line for line in agent.stderr_lines)
+        start("sim", "sim", "--scenario", "kitting", "--fast", "--no-rerun", ready="sim: scenario")
+        line = agent.wait_stderr("devices served now", timeout=60)
+        assert "r1-base" in line and "r1-arm" in line, line
+        run = subprocess.run(
+            [sys.executable, "-m", "skimesh", "run", "r1", "navigate", "goal=Station-2", *flags],
+            capture_output=True, text=True, timeout=120, cwd=ROOT,
+        )  # fmt: skip
+        assert run.returncode == 0, run.stdout + run.stderr
+        assert "navigate" in run.stdout and "succeeded" in run.stdout, run.stdout
+    finally:
+        for child in reversed(children):
+            child.stop()
