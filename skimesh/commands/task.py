@@ -27,46 +27,23 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
-import anyio
-import msgspec
-
 from meshlink import MeshlinkError, add_mesh_arguments
-from task_agent import TaskClient, TaskError, VerificationError, new_task_id
-from task_agent.protocol import (
-    StepProgress,
-    TaskEvent,
-    TaskFinished,
-    TaskInfo,
-    TaskOptions,
-)
 from wm_store import WmClient, WmError, ZenohTransport
 
-from ..errors import Exit, complain, exit_code
+from ..errors import Exit, exit_code
 from ..runtime import run_service
 from . import _plan as plan_command
+from . import _tasks as tasks
 from . import operator as operator_command
-from ._connect import mesh_session, store_answers, wm_session
+from ._connect import mesh_session, store_answers
 from ._render import plain_help
-from ._table import print_table
-from ._task_output import ProgressPrinter, info_lines, print_json, print_problems
 
-__all__ = ["EXIT_CODES", "add_parser"]
+__all__ = ["add_parser"]
 
 Sub = argparse._SubParsersAction  # argparse keeps the sub-parsers action class private
-#: A finished task's exit code by its outcome (the table: :class:`skimesh.errors.Exit`).
-EXIT_CODES = {
-    "succeeded": Exit.OK,
-    "failed": Exit.FAILED,
-    "unsolvable": Exit.REFUSED,
-    "aborted": Exit.ABORTED,
-    "partial": Exit.PARTIAL,
-}
-EXIT_CONTRADICTED, EXIT_INTERRUPTED = Exit.CONTRADICTED, Exit.INTERRUPTED
 
 
 def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
@@ -217,19 +194,19 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     )
     _follow_arguments(submit)
     _client_arguments(submit)
-    submit.set_defaults(func=lambda a: _client(a, _submit))
+    submit.set_defaults(func=lambda a: tasks.client(a, tasks.submit))
 
     status = cmds.add_parser("status", help="one task's state")
     status.add_argument("task_id", metavar="TASK_ID", help="the id `task submit` printed")
     _client_arguments(status)
-    status.set_defaults(func=lambda a: _client(a, _status))
+    status.set_defaults(func=lambda a: tasks.client(a, tasks.status))
 
     listing = cmds.add_parser("list", help="the tasks the task agent knows")
     listing.add_argument(
         "--active", action="store_true", help="running tasks only (default: finished ones too)"
     )
     _client_arguments(listing)
-    listing.set_defaults(func=lambda a: _client(a, _list))
+    listing.set_defaults(func=lambda a: tasks.client(a, tasks.listing))
 
     abort = cmds.add_parser(
         "abort",
@@ -245,7 +222,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
         help="why, recorded as the task's final message",
     )
     _client_arguments(abort)
-    abort.set_defaults(func=lambda a: _client(a, _abort))
+    abort.set_defaults(func=lambda a: tasks.client(a, tasks.abort))
 
     pause = cmds.add_parser(
         "pause",
@@ -258,7 +235,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     pause.add_argument("task_id", metavar="TASK_ID", help="the task to hold")
     pause.add_argument("--reason", default="paused from the command line", help="why")
     _client_arguments(pause)
-    pause.set_defaults(func=lambda a: _client(a, _hold))
+    pause.set_defaults(func=lambda a: tasks.client(a, tasks.hold))
 
     resume = cmds.add_parser(
         "resume",
@@ -268,7 +245,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     )
     resume.add_argument("task_id", metavar="TASK_ID", help="the task to release")
     _client_arguments(resume)
-    resume.set_defaults(func=lambda a: _client(a, _hold))
+    resume.set_defaults(func=lambda a: tasks.client(a, tasks.hold))
 
     watch = cmds.add_parser(
         "watch",
@@ -280,12 +257,12 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     watch.add_argument("task_id", metavar="TASK_ID", help="the task to follow")
     _follow_arguments(watch)
     _client_arguments(watch)
-    watch.set_defaults(func=lambda a: _client(a, _watch))
+    watch.set_defaults(func=lambda a: tasks.client(a, tasks.watch))
 
     verify = cmds.add_parser("verify", help="verify a task file against the world model")
     verify.add_argument("file", type=Path, metavar="FILE", help="the task file (TOML) to check")
     _client_arguments(verify)
-    verify.set_defaults(func=lambda a: _client(a, _verify))
+    verify.set_defaults(func=lambda a: tasks.client(a, tasks.verify))
 
     plan = cmds.add_parser(
         "plan",
@@ -295,7 +272,7 @@ def add_parser(sub: Sub[argparse.ArgumentParser]) -> None:
     )
     plan_command.add_arguments(plan)
     _client_arguments(plan)
-    plan.set_defaults(func=lambda a: _client(a, plan_command.plan_goal))
+    plan.set_defaults(func=lambda a: tasks.client(a, plan_command.plan_goal))
 
     operator_command.add_parser(sub)
 
@@ -369,209 +346,3 @@ def _serve(args: argparse.Namespace) -> int:
         return 0
 
     return run_service(main)
-
-
-# --------------------------------------------------------------------------- output
-
-
-# --------------------------------------------------------------------------- commands
-
-
-def _client(args: argparse.Namespace, body: Callable[[argparse.Namespace], Awaitable[int]]) -> int:
-    interrupted: list[bool] = []
-
-    async def main() -> int:
-        try:
-            return await body(args)
-        except anyio.get_cancelled_exc_class():
-            interrupted.append(True)
-            raise
-        except VerificationError as e:
-            complain(args, str(e))
-            print_problems(getattr(e, "problems", []))
-            return Exit.REFUSED
-        except (TaskError, MeshlinkError, OSError) as e:
-            complain(args, str(e))
-            return exit_code(e)
-        except TimeoutError:
-            deadline = getattr(args, "deadline", None)
-            within = f"--deadline {deadline:g} s" if deadline else f"--timeout {args.timeout:g} s"
-            complain(args, f"no end of the task within {within}")
-            return Exit.UNREACHABLE
-
-    code = run_service(main)
-    if interrupted:
-        print("interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    return code
-
-
-def _options(args: argparse.Namespace) -> TaskOptions:
-    fallback = frozenset(s.strip() for s in args.operator_fallback.split(","))
-    return TaskOptions(
-        engine=args.engine,
-        planner_timeout=args.planner_timeout,
-        planning=args.planning,
-        max_replans=args.max_replans,
-        simulate=args.simulate,
-        operator_fallback="*" in fallback,
-        operator_fallback_skills=fallback - {"", "*"},
-        priority=args.priority,
-        preemptible=not args.no_preempt,
-    )
-
-
-async def _submit(args: argparse.Namespace) -> int:
-    text = args.file.read_text(encoding="utf-8") if args.file else ""
-    task_id = args.task_id or new_task_id()
-    if args.emit_pddl and args.goal:
-        async with wm_session(args, author="planner-cli") as wm:
-            for path in await plan_command.emit_pddl(wm, args.goal, args.engine, args.emit_pddl):
-                print(f"wrote {path}", file=sys.stderr)
-    async with mesh_session(args) as mesh:
-        client = TaskClient(mesh, timeout=args.timeout)
-        async with client.watch(task_id, deadline=args.deadline, existing=False) as events:
-            if args.file:
-                await client.submit_file(text, options=_options(args), task_id=task_id)
-            else:
-                await client.submit_goal(args.goal, options=_options(args), task_id=task_id)
-            if args.detach:
-                print(task_id)
-                return 0
-            try:
-                return await _follow(args, events)
-            except anyio.get_cancelled_exc_class():
-                with anyio.CancelScope(shield=True), anyio.move_on_after(args.timeout + 15):
-                    print(f"aborting task {task_id} ...", file=sys.stderr)
-                    print(await client.abort(task_id, "interrupted (Ctrl-C)"), file=sys.stderr)
-                raise
-
-
-async def _follow(args: argparse.Namespace, events: AsyncIterator[TaskEvent]) -> int:
-    if not (args.json or args.no_progress) and sys.stdout.isatty():
-        return await _follow_live(events)
-    show: Callable[[TaskEvent], None] = print_json if args.json else ProgressPrinter()
-    async for event in events:
-        if not (args.no_progress and isinstance(event, StepProgress)):
-            show(event)
-        if isinstance(event, TaskFinished):
-            if event.check is not None and event.check.contradicted:
-                return EXIT_CONTRADICTED
-            return EXIT_CODES.get(event.outcome, Exit.FAILED)
-    return Exit.UNREACHABLE  # pragma: no cover - the stream ends with TaskFinished
-
-
-async def _follow_live(events: AsyncIterator[TaskEvent]) -> int:
-    """On a terminal: one live view of the task, then its summary (see ``_live``)."""
-    from rich.console import Console
-
-    from ._live import follow_live
-
-    printer = ProgressPrinter()  # keeps the per-robot times for the summary
-    finished = await follow_live(events, Console(), on_event=printer.lines)
-    if finished is None:  # the stream ended without the task's end
-        return Exit.UNREACHABLE
-    print("\n".join(printer.lines(finished)))
-    if finished.check is not None and finished.check.contradicted:
-        return EXIT_CONTRADICTED
-    return EXIT_CODES.get(finished.outcome, Exit.FAILED)
-
-
-async def _watch(args: argparse.Namespace) -> int:
-    async with mesh_session(args) as mesh:
-        client = TaskClient(mesh, timeout=args.timeout)
-        async with client.watch(args.task_id, deadline=args.deadline) as events:
-            return await _follow(args, events)
-
-
-async def _status(args: argparse.Namespace) -> int:
-    async with mesh_session(args) as mesh:
-        info = await TaskClient(mesh, timeout=args.timeout).status(args.task_id)
-    if args.json:
-        print_json(info)
-    else:
-        print("\n".join(info_lines(info)))
-    return 0
-
-
-async def _list(args: argparse.Namespace) -> int:
-    async with mesh_session(args) as mesh:
-        tasks = await TaskClient(mesh, timeout=args.timeout).list(active_only=args.active)
-    if args.json:
-        print_json(tasks)
-    else:
-        print_table(
-            ("TASK", "STATE", "PRIO", "HOLDS", "ESTIMATED END", "REPLANS", "GOAL"),
-            [_list_row(info) for info in tasks],
-        )
-    return 0
-
-
-def _list_row(info: TaskInfo) -> tuple[str, ...]:
-    """One row of ``task list``: the task's state (waiting: for what), what it holds (its
-    claims: no other task commands them) and when it should end (its start plus the estimated
-    makespan, on the task agent's clock)."""
-    state: str = info.outcome
-    if info.paused:
-        state += " (paused)"
-    elif info.waiting:
-        state = f"waiting for {info.waiting}"
-    end = "-"
-    if info.outcome == "running" and info.estimated_makespan is not None and info.started_at:
-        end = time.strftime("%H:%M:%S", time.localtime(info.started_at + info.estimated_makespan))
-    holds = ", ".join(info.claims) or "-"
-    return (
-        info.task_id,
-        state,
-        str(info.priority),
-        holds,
-        end,
-        str(info.replans),
-        info.goal or info.name,
-    )
-
-
-async def _abort(args: argparse.Namespace) -> int:
-    """The service answers once the task ended (or its wait ran out): the task's state after
-    the abort says which."""
-    async with mesh_session(args) as mesh:
-        client = TaskClient(mesh, timeout=args.timeout)
-        reply = await client.abort(args.task_id, args.reason)
-        info = await client.status(args.task_id)
-    if args.json:
-        print_json({**msgspec.to_builtins(info), "reply": reply})  # the task, and the answer
-    else:
-        print(reply)
-    if info.outcome == "running":
-        complain(args, f"task {args.task_id} is still running after the abort")
-        return Exit.FAILED
-    return 0
-
-
-async def _hold(args: argparse.Namespace) -> int:
-    """``task pause`` / ``task resume``: the service's answer."""
-    async with mesh_session(args) as mesh:
-        client = TaskClient(mesh, timeout=args.timeout)
-        if args.task_command == "pause":
-            message = await client.pause(args.task_id, args.reason)
-        else:
-            message = await client.resume(args.task_id)
-    print_json({"task_id": args.task_id, "reply": message}) if args.json else print(message)
-    return 0
-
-
-async def _verify(args: argparse.Namespace) -> int:
-    from task_agent.taskfile import load_task_file
-
-    text = args.file.read_text(encoding="utf-8")
-    load_task_file(text, source=str(args.file))  # syntax errors with the line, offline
-    async with mesh_session(args) as mesh:
-        reply = await TaskClient(mesh, timeout=args.timeout).verify(text)
-    if args.json:
-        print_json(reply)
-    elif reply.ok:
-        print(f"{args.file}: verifies")
-    else:
-        print(f"{args.file}: {len(reply.problems)} problems", file=sys.stderr)
-        print_problems(reply.problems)
-    return 0 if reply.ok else 1

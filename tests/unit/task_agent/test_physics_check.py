@@ -14,7 +14,7 @@ import pytest
 from device_drivers import DeviceUnavailableError, WorldPose
 from device_drivers import truth as t
 from skimesh.commands._task_output import check_lines
-from skimesh.commands.task import EXIT_CONTRADICTED, _follow
+from skimesh.commands._tasks import EXIT_CONTRADICTED, follow
 from task_agent import NO_SIMULATOR, check_goal_facts, parse_goal
 from task_agent.protocol import GoalCheck, SubmitGoal, TaskEvent, TaskFinished
 from task_agent.service import TaskService
@@ -111,9 +111,9 @@ async def test_a_contradicting_physics_is_reported_and_exits_5() -> None:
         yield TaskFinished(task_id="t", seq=1, stamp=0.0, outcome="succeeded", check=check)
 
     args = argparse.Namespace(json=True, no_progress=True)
-    assert await _follow(args, events(check)) == EXIT_CONTRADICTED == 5
-    assert await _follow(args, events(agrees)) == 0
-    assert await _follow(args, events(None)) == 0
+    assert await follow(args, events(check)) == EXIT_CONTRADICTED == 5
+    assert await follow(args, events(agrees)) == 0
+    assert await follow(args, events(None)) == 0
 
 
 async def test_a_simulator_that_cannot_answer_leaves_the_facts_undecided() -> None:
