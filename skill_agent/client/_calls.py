@@ -72,7 +72,7 @@ EventCallback = Callable[[RunEvent], object]
 
 def new_run_id() -> str:
     """A fresh run id (a valid key segment)."""
-    return uuid.uuid4().hex
+    return uuid.uuid4().hex[:16]
 
 
 class AgentClient:

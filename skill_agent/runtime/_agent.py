@@ -295,7 +295,7 @@ class AgentCore:
 
     def _new_run_id(self, wanted: str) -> str:
         if not wanted:
-            return uuid.uuid4().hex[:12]
+            return uuid.uuid4().hex[:16]
         if not _RUN_ID.fullmatch(wanted):
             raise ParameterError(f"run id {wanted!r}: use 1-128 of [A-Za-z0-9_.-]")
         return wanted

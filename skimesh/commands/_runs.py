@@ -178,7 +178,8 @@ class _Show:
         if args.json:
             self.print_json({"agent": args.agent, **msgspec.to_builtins(info)})
         else:
-            print(f"run {args.run_id} on {args.agent}: {verb}d ({info.state})")
+            now = "" if info.state == f"{verb}d" else f" (now {info.state})"
+            print(f"{info.skill} {args.run_id} on {args.agent}: {verb}d{now}")
         return 0
 
 

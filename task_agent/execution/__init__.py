@@ -29,7 +29,6 @@ executor plans through :mod:`task_agent.planning`, so this sub-package imports u
 from ._executor import EXCLUDED_REASONS as EXCLUDED_REASONS
 from ._executor import Executor as Executor
 from ._executor import GoalVerifier as GoalVerifier
-from ._executor import PlanSource as PlanSource
 from ._history import MAX_TASK_EVENTS as MAX_TASK_EVENTS
 from ._history import EventHistory as EventHistory
 from ._run_writes import RunWrites as RunWrites
@@ -54,6 +53,7 @@ from ._state import unmet_goal as unmet_goal
 from ._steps import EventSink as EventSink
 from ._steps import StepOutcome as StepOutcome
 from ._steps import StepScheduler as StepScheduler
+from ._task_planning import PlanSource as PlanSource
 
 __all__ = [
     "EXCLUDED_REASONS",

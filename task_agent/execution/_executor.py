@@ -63,26 +63,17 @@ Every event is kept in :attr:`Executor.history` (bounded: :mod:`._history`).
 
 from __future__ import annotations
 
-import functools
 import logging
 import time
-from collections.abc import Awaitable, Callable, Mapping, Sequence
-from typing import Protocol
+from collections.abc import Awaitable, Callable
 
 import anyio
-import msgspec
-
-from skill_agent import WorldView
-from wm_store import display_name
 
 from .._errors import DomainError, PlanningError, UnsolvableError
-from .._goals import Goal, GoalLiteral
-from .._physics import fact_text
+from .._goals import Goal
 from ..claims import ClaimBook
-from ..discovery import AgentInfo, Discovery
-from ..domain import Lit
+from ..discovery import Discovery
 from ..learning import DurationBook, FailedStep, TaskLearning
-from ..planning import PartialOrderPlan, Plan, PlanStep, to_partial_order
 from ..protocol import (
     GoalCheck,
     LostFact,
@@ -99,22 +90,22 @@ from ..protocol import (
     TaskResumed,
     TaskStarted,
 )
-from ._claiming import TaskClaims, free_agents
+from ._claiming import TaskClaims
 from ._history import MAX_TASK_EVENTS, EventHistory
 from ._run_writes import RunWrites
 from ._runners import SkillRunner
 from ._safe_state import SafeStatePhase
+from ._salvage import partial_ending, partial_result, still_reachable
 from ._state import (
-    StepSpec,
     WorldModel,
     schedule,
     steps_from_file,
-    steps_from_plan,
     unmet_goal,
 )
 from ._steps import EventSink, StepOutcome, StepScheduler
+from ._task_planning import PlanSource, TaskPlanning
 
-__all__ = ["EXCLUDED_REASONS", "Executor", "GoalVerifier", "PlanSource"]
+__all__ = ["EXCLUDED_REASONS", "Executor", "GoalVerifier"]
 
 _log = logging.getLogger(__name__)
 
@@ -125,24 +116,6 @@ that agent is left out of the task's later plans."""
 
 GoalVerifier = Callable[[Goal], Awaitable[GoalCheck]]
 """Checks a goal that holds in the world model, fact by fact (world model and physics)."""
-
-
-class PlanSource(Protocol):
-    """What the executor needs of :class:`~task_agent.planning.Planner`."""
-
-    @property
-    def engine(self) -> str: ...
-
-    async def plan(
-        self,
-        agents: Sequence[AgentInfo],
-        view: WorldView,
-        goal: Goal,
-        *,
-        exclude: Sequence[tuple[str, str, Mapping[str, object]]] = (),
-        progress: Callable[[int, int], None] | None = None,
-        previous: Sequence[tuple[Sequence[Lit], Sequence[PlanStep]]] = (),
-    ) -> Plan: ...
 
 
 class Executor:
@@ -202,10 +175,6 @@ class Executor:
         self.name = ""
         self.outcome: TaskOutcome = "running"
         self.message = ""
-        self.planning = ""
-        """While a long plan is made: how far it got (set from the planner's thread)."""
-        self._last: tuple[Plan, PartialOrderPlan, int] | None = None
-        """The last plan, its partial order and the index of its first step."""
         self.reasons: list[str] = []
         """Why each replan happened."""
         self.started_at = time.time()
@@ -223,17 +192,29 @@ class Executor:
             catch_up=self._catch_up,
         )
         """This task's side of ``claims``: claiming, waiting, giving way."""
+        self.plans = TaskPlanning(
+            task_id=task_id,
+            planner=planner,
+            wm=wm,
+            discovery=discovery,
+            learning=self.learning,
+            claiming=self.claiming,
+            steps=self.steps,
+            events=self.events,
+            catch_up=self._catch_up,
+            agent_wait=agent_wait,
+        )
+        """Its plans: made around what other tasks hold, timed, numbered, announced."""
         self.safe_state = SafeStatePhase(
             wm=wm,
             discovery=discovery,
             steps=self.steps,
             events=self.events,
             planner=planner,
-            number=self._steps_of,
+            number=self.plans.steps_of,
         )
         self._scope = anyio.CancelScope()
         self._abort_reason = ""
-        self._next_step = 0
 
     # ------------------------------------------------------------------ public
 
@@ -287,7 +268,7 @@ class Executor:
             finished_at=self.finished_at,
             replans=self.replans,
             steps_run=self.steps.steps_run,
-            message=self.message or self.planning,
+            message=self.message or self.plans.progress,
             check=self.check,
             paused=self.paused and self.outcome == "running",
             partial=self.partial,
@@ -374,9 +355,9 @@ class Executor:
         salvaged = -1
         while True:
             try:
-                steps = await self._plan(target, attempt, excluded)
+                steps = await self.plans.plan(target, attempt, excluded)
                 while await self.claiming.claim(steps, preemptible=True):
-                    steps = await self._plan(target, attempt, excluded)  # changed meanwhile
+                    steps = await self.plans.plan(target, attempt, excluded)  # changed meanwhile
             except (UnsolvableError, DomainError) as e:
                 if attempt == 0:
                     return "unsolvable", str(e)
@@ -425,33 +406,13 @@ class Executor:
 
     async def _salvage(self, goal: Goal, why: str) -> tuple[Goal | None, list[LostFact]]:
         """After a lost agent left the goal unreachable: the facts the agents left can still
-        reach together (the ones that hold now, then each open fact that a plan with the others
-        kept still reaches), and the facts lost with why. None: nothing is left to do."""
+        reach together, and the facts lost with why (:mod:`._salvage`). None: nothing is left
+        to do."""
         assert self.planner is not None
-        label_of = self._label_of
-        keep: list[GoalLiteral] = []
-        open_: list[GoalLiteral] = []
-        for lit in goal.literals:
-            (open_ if unmet_goal(Goal(literals=(lit,)), self.wm) else keep).append(lit)
-        agents = self._agents(set())
         gone = ", ".join(sorted(self.steps.lost))
-        lost: list[LostFact] = []
-        todo = 0
-        for lit in open_:
-            trial = Goal(literals=(*keep, lit))
-            try:
-                await self.planner.plan(agents, self.wm, trial)
-            except PlanningError as e:
-                detail = str(e).splitlines()[0] if str(e) else why
-                lost.append(
-                    LostFact(
-                        fact=fact_text(lit, label_of),
-                        why=f"unreachable with the agents left ({gone} lost): {detail}",
-                    )
-                )
-                continue
-            keep.append(lit)
-            todo += 1
+        keep, todo, lost = await still_reachable(
+            self.planner, self.plans.agents(set()), self.wm, goal, why=why, gone=gone
+        )
         _log.warning(
             "task %s: %s lost; %d goal facts still reachable, %d lost",
             self.task_id,
@@ -467,123 +428,18 @@ class Executor:
         return (Goal(literals=tuple(keep)) if todo else None), lost
 
     def _partial_result(self, goal: Goal, lost: list[LostFact]) -> PartialResult:
-        achieved = [
-            fact_text(lit, self._label_of)
-            for lit in goal.literals
-            if not unmet_goal(Goal(literals=(lit,)), self.wm)
-        ]
-        return PartialResult(
-            achieved=achieved, lost=lost, lost_agents=list(self.steps.lost.values())
-        )
+        return partial_result(goal, lost, self.wm, self.steps.lost.values())
 
     def _partial(self, goal: Goal, lost: list[LostFact]) -> tuple[TaskOutcome, str]:
-        self.partial = result = self._partial_result(goal, lost)
-        agents = "; ".join(
-            f"{a.agent} at step {a.step} {a.skill}" if a.step >= 0 else a.agent
-            for a in result.lost_agents
-        )
-        summary = (
-            f"{len(result.achieved)} of {len(goal.literals)} goal facts achieved; lost: "
-            + "; ".join(f.fact for f in lost)
-            + f" (agents lost: {agents})"
-        )
-        if not result.achieved:
-            return "failed", f"no goal fact achieved after losing an agent: {summary}"
-        return "partial", summary
-
-    def _label_of(self, element_id: str) -> str:
-        element = self.wm.find_element(element_id)
-        return element.label if element is not None and element.label else element_id
-
-    async def _plan(
-        self, goal: Goal, attempt: int, excluded: set[tuple[str, str]]
-    ) -> list[StepSpec]:
-        assert self.planner is not None
-        await self._catch_up()
-        await self._await_agents()
-        started = time.perf_counter()
-        failed = self.learning.excluded()
-        busy = self.claiming.busy_agents()
-        agents = self._agents(excluded)
-        free = free_agents(agents, busy)
-        plan_ = functools.partial(
-            self.planner.plan, exclude=failed, progress=self._planning, previous=self._left()
-        )
-        around = free if busy and free else agents  # all busy: nothing to plan around with
-        try:  # around what other tasks hold first, else with it (and wait for it: TaskClaims.claim)
-            plan = await plan_(around, self.wm, goal)
-        except (UnsolvableError, DomainError) as e:
-            if around is not agents:
-                _log.info(
-                    "task %s: no plan without %s (busy); trying with them", self.task_id, busy
-                )
-                plan = await plan_(agents, self.wm, goal)
-            elif excluded and isinstance(e, UnsolvableError):
-                _log.info("task %s: no plan without %s; trying with them", self.task_id, excluded)
-                plan = await plan_(self._agents(set()), self.wm, goal)
-            else:
-                raise
-        finally:
-            self.planning = ""
-        timing = self.learning.timer(plan.task.objects)
-        order = await anyio.to_thread.run_sync(
-            functools.partial(to_partial_order, plan, timing=timing)
-        )
-        seconds = time.perf_counter() - started
-        self._last = (plan, order, self._next_step)
-        steps = self._steps_of(order)
-        self.events.emit(
-            Planned,
-            steps=[s.planned() for s in steps],
-            names=self._names(steps),
-            attempt=attempt,
-            planner=self.planner.engine,
-            plan_seconds=seconds,
-            makespan=order.makespan,
-            sequential=order.sequential,
-            parts=plan.stats.parts,
-        )
-        return steps
-
-    def _left(self) -> list[tuple[tuple[Lit, ...], list[PlanStep]]]:
-        """What the last plan has left to run, by its blocks of goal parts (a replan keeps
-        the parts a failure did not touch: :meth:`Planner.solve`'s ``previous``)."""
-        if self._last is None:
-            return []
-        plan, order, first = self._last
-        ran = {
-            s.step.ground for i, s in enumerate(order.steps) if first + i in self.steps.succeeded
-        }
-        return plan.remaining(ran)
-
-    def _planning(self, done: int, parts: int) -> None:
-        """The planner's progress (its worker thread): shown by ``task status`` / ``list``."""
-        self.planning = f"planning: {done} of {parts} goal parts planned"
+        self.partial = self._partial_result(goal, lost)
+        return partial_ending(goal, self.partial)
 
     async def _outage_during(self, failure: StepOutcome) -> bool:
         """Whether a lost router or a partition overlapped the failed step (its failure is
         then no reason to leave the skill out): waits for the vanished tokens to be judged."""
         await anyio.sleep(self.discovery.settle)
-        await self._await_agents()
+        await self.plans.await_agents()
         return self.discovery.outages > failure.outages
-
-    async def _await_agents(self) -> None:
-        """Before planning: while agents are unknown (a lost router or a partition), until
-        each is back or lost (the grace period bounds it); when none is available, up to
-        ``agent_wait`` seconds for one."""
-        with anyio.move_on_after(self.agent_wait):
-            while not self.discovery.agents() and not self.discovery.unknown:
-                await self.discovery.wait_changed()
-        if self.discovery.unknown:
-            _log.warning(
-                "task %s: agents %s out of reach; waiting up to %g s before planning",
-                self.task_id,
-                ", ".join(sorted(self.discovery.unknown)),
-                self.discovery.grace,
-            )
-        with anyio.move_on_after(self.discovery.grace + self.discovery.settle + 1.0):
-            while self.discovery.unknown:
-                await self.discovery.wait_changed()
 
     async def _learn(self, failure: StepOutcome) -> FailedStep | None:
         """The learning hook for a failed step: kept with the state it failed in."""
@@ -593,44 +449,17 @@ class Executor:
             failure, next((a for a in agents if a.name == failure.agent), None)
         )
 
-    def _agents(self, excluded: set[tuple[str, str]]) -> list[AgentInfo]:
-        agents = self.discovery.agents()
-        return [
-            msgspec.structs.replace(
-                a, skills=tuple(s for s in a.skills if (a.name, s.name) not in excluded)
-            )
-            for a in agents
-        ]
-
-    def _names(self, steps: list[StepSpec]) -> dict[str, str]:
-        """The display names of the elements the steps' parameters give by id."""
-        names: dict[str, str] = {}
-        for step in steps:
-            for value in step.planned().params.values():
-                element = self.wm.find_element(value) if isinstance(value, str) else None
-                if element is not None:
-                    names[element.id] = display_name(element)
-        return names
-
-    def _steps_of(self, order: PartialOrderPlan) -> list[StepSpec]:
-        """The plan's steps, numbered after the task's steps so far."""
-        return self._number(steps_from_plan(order, self._next_step))
-
-    def _number(self, steps: list[StepSpec]) -> list[StepSpec]:
-        self._next_step += len(steps)
-        return steps
-
     async def _follow(self, task_file: TaskFile) -> tuple[TaskOutcome, str]:
         durations = {
             s.name: s.duration
             for a in self.discovery.agents(include_unavailable=True)
             for s in a.skills
         }
-        steps = self._number(schedule(steps_from_file(task_file), durations))
+        steps = self.plans.number(schedule(steps_from_file(task_file), durations))
         self.events.emit(
             Planned,
             steps=[s.planned() for s in steps],
-            names=self._names(steps),
+            names=self.plans.names(steps),
             planner="task file",
             makespan=max((s.finish for s in steps), default=0.0),
             sequential=sum(s.finish - s.start for s in steps),

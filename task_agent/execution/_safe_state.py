@@ -40,7 +40,7 @@ from ._state import StepSpec, WorldModel
 from ._steps import EventSink, StepOutcome, StepScheduler
 
 if TYPE_CHECKING:
-    from ._executor import PlanSource
+    from ._task_planning import PlanSource
 
 __all__ = ["CONTAIN", "SafeStatePhase", "held_by"]
 

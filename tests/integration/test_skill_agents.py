@@ -547,8 +547,11 @@ def test_cli_run_skills_and_agents(site: Site) -> None:
     assert refused.returncode == 2 and "did you mean 'probe'" in refused.stderr
     bad = skimesh(site, "run", "picker", "probe", "seconds=soon")
     assert bad.returncode == 2 and "no valid float" in bad.stderr
-    lost = skimesh(site, "run", "nobody", "noop", "--timeout", "0.5")
-    assert lost.returncode == 3 and "no agent 'nobody' is alive" in lost.stderr, lost.stderr
+    unknown = skimesh(site, "run", "nobody", "noop", "--timeout", "0.5")  # not in the world model
+    assert unknown.returncode == 2, unknown.stderr
+    assert (
+        "no agent 'nobody' on mesh" in unknown.stderr and "(alive: mover, picker)" in unknown.stderr
+    )
     listing = skimesh(site, "skills", "mover", "--json")
     assert sorted(d["name"] for d in json.loads(listing.stdout)["mover"]) == [
         "noop",
