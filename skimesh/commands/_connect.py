@@ -47,13 +47,13 @@ async def store_answers(mesh: Mesh, who: str, *, timeout: float) -> None:
 
     def say(waited: float, error: TransportError) -> None:
         _log.info(
-            "%s: waiting for the world-model store on mesh %r (%.0f s so far; start `skimesh "
-            "wm` on this mesh, or check the ACL): %s",
+            "%s: waiting for the world-model store on mesh %r (%.0f s so far; is `skimesh wm` "
+            "running on this mesh, and does the ACL allow this client?)",
             who,
             mesh.keys.mesh,
             waited,
-            error,
         )
+        _log.debug("%s: the store's answer: %s", who, error)
 
     waited = await wait_for_store(ZenohTransport(mesh), timeout=timeout, say=say)
     if waited > 1.0:
