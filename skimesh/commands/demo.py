@@ -16,9 +16,9 @@ sessions close and the recording is flushed; a second Ctrl-C stops at once).
 Recording (rerun): ``run.rrd`` in the current directory by default (``--rrd``): the 3-D scene
 over time, each robot's active skill and progress, task events, replans, the plan, every
 world-model change, labels on robots and objects, where the world model believes each object
-is (ghosts), and with ``--images`` the scenario's cameras (rendered headless through EGL;
-without EGL the run goes on without images); the default layout frames the robots and the
-work (:mod:`skimesh.recording`). ``--rerun-connect URL`` also streams to a running viewer;
+is (ghosts), and the scenario's cameras (rendered headless through EGL; without EGL the run
+goes on without images; ``--no-images`` leaves them out); the default layout frames the robots
+and the work (:mod:`skimesh.recording`). ``--rerun-connect URL`` also streams to a running viewer;
 ``--rerun-serve`` serves the recording on 127.0.0.1 for a viewer to connect to later (the
 command then waits for Ctrl-C after the summary).
 """
@@ -89,8 +89,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--rerun-serve", action="store_true", help="serve the recording on "
                    "127.0.0.1 for a viewer to connect later")  # fmt: skip
     p.add_argument("--rerun-port", type=int, default=9876, help="port of --rerun-serve")
-    p.add_argument("--images", action="store_true", help="also record the scenario's camera "
-                   "images (rendered headless through EGL; none without EGL)")  # fmt: skip
+    p.add_argument("--images", action=argparse.BooleanOptionalAction, default=True,
+                   help="record the scenario's camera images (rendered headless through EGL; "
+                   "none without EGL; default: on, --no-images leaves them out)")  # fmt: skip
     p.add_argument("--port", type=int, default=0, help="router port on 127.0.0.1 (default: free)")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated sensor noise")
     p.add_argument("--max-replans", type=int, default=5, metavar="N",
