@@ -21,19 +21,14 @@ import msgspec
 from meshlink import add_mesh_arguments
 from wm_store import (
     ElementNotFoundError,
-    RemoteError,
     WmClient,
-    ZenohTransport,
     transact_in_batches,
 )
 from wm_store.ontology import did_you_mean
 from wm_store.protocol import (
     Element,
-    ElementsReply,
-    GetElements,
     PropertyFilter,
     Query,
-    Resolve,
 )
 from wm_store.scene import SceneState, id_sort_key
 
@@ -42,6 +37,7 @@ from ..runtime import run_service
 from ._connect import mesh_session, wm_session
 from ._edit import add_edit_commands
 from ._render import element_line, render_tree
+from ._store_reads import elements_by_name
 from ._teach import add_ontology_commands
 
 __all__ = ["add_client_commands"]
@@ -239,62 +235,14 @@ def _element(wm: WmClient, element_id: str) -> Element:
 
 
 def _get(args: argparse.Namespace) -> int:
-    """``wm get``: one read from the store, no replica (no snapshot, no ontology: start-up
-    time). A name that is no id but one element's label gets that element (``wm get r1``); an
-    unknown name, or a label several elements share, is refused naming the candidates."""
+    """``wm get``: reads from the store, no replica (:func:`elements_by_name`)."""
 
     async def main() -> int:
         async with mesh_session(args) as mesh:
-            transport = ZenohTransport(mesh)
-            reply = await transport.request(GetElements(ids=args.ids), timeout=args.timeout)
-            if isinstance(reply, ElementsReply):
-                return await _print_json(reply.elements)
-            listing = await transport.request(Resolve(query=Query()), timeout=args.timeout)
-            known = listing.elements if isinstance(listing, ElementsReply) else []
-            ids = _by_label(args.ids, known)
-            if ids is not None and ids != args.ids:
-                reply = await transport.request(GetElements(ids=ids), timeout=args.timeout)
-                if isinstance(reply, ElementsReply):
-                    return await _print_json(reply.elements)
-        if not known or ids is not None:  # the store's own error (an ACL, a fault)
-            raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
-        raise ElementNotFoundError("; ".join(_unknown(args.ids, known)))
+            found = await elements_by_name(mesh, args.ids, timeout=args.timeout)
+        return await _print_json(found)
 
     return run_service(main)
-
-
-def _by_label(names: list[str], known: list[Element]) -> list[str] | None:
-    """Each name as an id: itself where it is one, else the id of the one element it labels;
-    None when a name is neither, or labels several elements."""
-    ids = {e.id for e in known}
-    out = []
-    for name in names:
-        labelled = [e.id for e in known if e.label == name]
-        if name in ids:
-            out.append(name)
-        elif len(labelled) == 1:
-            out.append(labelled[0])
-        else:
-            return None
-    return out
-
-
-def _unknown(names: list[str], known: list[Element]) -> list[str]:
-    """Why each name that is neither an id nor a unique label is refused, with the closest
-    ids and labels."""
-    ids = {e.id for e in known}
-    said = []
-    for name in names:
-        labelled = sorted((e.id for e in known if e.label == name), key=id_sort_key)
-        if name in ids or len(labelled) == 1:
-            continue
-        if labelled:
-            said.append(f"{len(labelled)} elements are labelled {name!r}: give one's id "
-                        f"({', '.join(labelled)})")  # fmt: skip
-            continue
-        names_known = sorted(ids | {e.label for e in known if e.label})
-        said.append(f"no element {name!r} in the world model{did_you_mean(name, names_known)}")
-    return said
 
 
 def _client(args: argparse.Namespace, body: Body) -> int:
