@@ -4,16 +4,22 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
+from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
 
-from meshlink import Mesh, mesh_config_from_args, open_mesh
+import anyio
+
+from meshlink import Mesh, MeshConfig, SessionError, mesh_config_from_args, open_mesh
 from wm_store import TransportError, WmClient, ZenohTransport, wait_for_store
 
 from ..errors import UsageError
 
-__all__ = ["mesh_session", "read_terms", "store_answers", "wm_session"]
+__all__ = ["mesh_session", "read_terms", "service_mesh", "store_answers", "wm_session"]
+
+ROUTER_POLL_MAX = 5.0
+"""Seconds between two tries to reach the router, at most (from 0.5 s, doubling)."""
 
 _log = logging.getLogger("skimesh")
 
@@ -21,6 +27,38 @@ _log = logging.getLogger("skimesh")
 @asynccontextmanager
 async def mesh_session(args: argparse.Namespace) -> AsyncIterator[Mesh]:
     async with open_mesh(mesh_config_from_args(args)) as mesh:
+        yield mesh
+
+
+@asynccontextmanager
+async def service_mesh(
+    config: MeshConfig | argparse.Namespace, who: str, *, every: float = 30.0
+) -> AsyncIterator[Mesh]:
+    """A long-running service's session. A client started before its router (or while it
+    restarts) waits for it, trying again every 0.5 s, then at most every
+    :data:`ROUTER_POLL_MAX` s, and says so every ``every`` seconds, as it waits for the store
+    (:func:`store_answers`); Ctrl-C stops the wait. A session that listens (a peer or a
+    router: a port in use) fails at once."""
+    if isinstance(config, argparse.Namespace):
+        config = mesh_config_from_args(config)
+    began = anyio.current_time()
+    said_at, pause = -math.inf, 0.5
+    async with AsyncExitStack() as stack:
+        while True:
+            try:
+                mesh = await stack.enter_async_context(open_mesh(config))
+                break
+            except SessionError as e:
+                if config.mode != "client" or config.listen:
+                    raise
+                waited = anyio.current_time() - began
+                if waited - said_at >= every:
+                    said_at = waited
+                    _log.info("%s: waiting for the router (%.0f s so far): %s", who, waited, e)
+            await anyio.sleep(pause)  # a router that is not there gives no event to wait on
+            pause = min(ROUTER_POLL_MAX, pause * 2)
+        if said_at > -math.inf:
+            _log.info("%s: the router answers (after %.0f s)", who, anyio.current_time() - began)
         yield mesh
 
 

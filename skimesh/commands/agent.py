@@ -31,7 +31,7 @@ from ..runtime import run_service
 from . import _agent_clients as clients
 from . import _runs as runs_command
 from ._agent_clients import parse_params
-from ._connect import mesh_session, store_answers
+from ._connect import service_mesh, store_answers
 
 if TYPE_CHECKING:  # the runtime and server load only to serve an agent (start-up time)
     from skill_agent.runtime import AgentConfig
@@ -251,8 +251,8 @@ def _serve(args: argparse.Namespace) -> int:
     async def main() -> int:
         try:
             async with AsyncExitStack() as stack:
-                mesh = await stack.enter_async_context(mesh_session(args))
                 who = "agent " + ", ".join(c.name for c in configs)
+                mesh = await stack.enter_async_context(service_mesh(args, who))
                 await store_answers(mesh, who, timeout=args.timeout)
                 wm = None
                 if len(configs) > 1:  # the agents of one process share one replica

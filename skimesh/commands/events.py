@@ -20,10 +20,10 @@ from typing import TYPE_CHECKING
 
 import anyio
 
-from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
+from meshlink import add_mesh_arguments
 
 from ..runtime import run_service
-from ._connect import mesh_session, store_answers
+from ._connect import mesh_session, service_mesh, store_answers
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator
@@ -110,7 +110,7 @@ def _serve(args: argparse.Namespace) -> int:
     from ..eventlog import serve_event_log
 
     async def main() -> int:
-        async with open_mesh(mesh_config_from_args(args)) as mesh, anyio.create_task_group() as tg:
+        async with service_mesh(args, "event log") as mesh, anyio.create_task_group() as tg:
             if not args.no_wm:
                 await store_answers(mesh, "event log", timeout=args.timeout)
             serve = functools.partial(

@@ -28,10 +28,10 @@ from typing import TYPE_CHECKING, Any
 
 import anyio
 
-from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
+from meshlink import add_mesh_arguments
 
 from ..runtime import run_service
-from ._connect import store_answers
+from ._connect import service_mesh, store_answers
 
 if TYPE_CHECKING:
     from mujoco_sim.recording import Recorder
@@ -138,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         try:
-            async with open_mesh(mesh_config_from_args(args)) as mesh:
+            async with service_mesh(args, "monitor") as mesh:
                 await store_answers(mesh, "monitor", timeout=args.timeout)
                 async with anyio.create_task_group() as tg:
                     started = partial(run_monitor, mesh, options, recorder, say=say)

@@ -21,10 +21,11 @@ from pathlib import Path
 
 import anyio
 
-from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
+from meshlink import add_mesh_arguments
 
 from ..paths import config_path
 from ..runtime import run_service, settle_heap
+from ._connect import service_mesh
 
 __all__ = ["add_parser", "scenario_file"]
 
@@ -86,7 +87,7 @@ def _run(args: argparse.Namespace) -> int:
         failure: BaseException | None = None
         world: SimWorld | None = None
         try:
-            async with open_mesh(mesh_config_from_args(args)) as mesh:
+            async with service_mesh(args, "sim") as mesh:
                 world = await SimWorld.create(scenario, options, recorder)
                 if recorder is not None:  # the layout framed on this world, and its labels
                     from ..recording import record_scene

@@ -38,7 +38,7 @@ from ..runtime import run_service
 from . import _plan as plan_command
 from . import _tasks as tasks
 from . import operator as operator_command
-from ._connect import mesh_session, store_answers
+from ._connect import service_mesh, store_answers
 from ._render import plain_help
 
 __all__ = ["add_parser"]
@@ -327,7 +327,7 @@ def _serve(args: argparse.Namespace) -> int:
 
     async def main() -> int:
         try:
-            async with mesh_session(args) as mesh:
+            async with service_mesh(args, "task agent") as mesh:
                 await store_answers(mesh, "task agent", timeout=args.timeout)
                 async with WmClient.connect(
                     ZenohTransport(mesh), author="task-agent", timeout=args.timeout

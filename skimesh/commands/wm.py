@@ -15,12 +15,12 @@ from typing import TYPE_CHECKING
 
 import anyio
 
-from meshlink import add_mesh_arguments, mesh_config_from_args, open_mesh
+from meshlink import add_mesh_arguments, mesh_config_from_args
 from wm_store.protocol import Transact
 
 from ..errors import UsageError
 from ..runtime import run_service
-from ._connect import read_terms
+from ._connect import read_terms, service_mesh
 from ._wm_client import add_client_commands
 
 if TYPE_CHECKING:
@@ -102,7 +102,10 @@ def _serve(args: argparse.Namespace) -> int:
         if detail := store.recovery_detail:  # a clean log is news only with -v
             clean = detail.startswith("clean:") and ";" not in detail
             _log.log(logging.INFO if clean else logging.WARNING, "recovery: %s", detail)
-        async with open_mesh(mesh_config) as mesh, anyio.create_task_group() as tg:
+        async with (
+            service_mesh(mesh_config, "world model") as mesh,
+            anyio.create_task_group() as tg,
+        ):
             await tg.start(serve_store, mesh, store)
             for name, text in terms:
                 before = store.revision

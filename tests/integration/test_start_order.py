@@ -88,3 +88,43 @@ def test_an_agent_started_before_the_simulator_binds_its_devices_once_served(
     finally:
         for child in reversed(children):
             child.stop()
+
+
+def test_services_started_before_the_router_wait_for_it(mesh_name: str, tmp_path: Path) -> None:
+    """The store, an agent and the task agent started before the router say they wait for it,
+    then come up once it listens."""
+    from meshlink.testing import free_port
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    flags = ["--connect", endpoint, "--mesh", mesh_name]
+    early = {
+        "world model": Child(
+            ["-m", "skimesh", "wm", "--data", str(tmp_path / "wm"), "--scenario", "kitting",
+             *flags],
+            name="wm",
+        ),
+        "agent r1": Child(
+            ["-m", "skimesh", "agent", "--scenario", "kitting", "--robot", "r1", "--simulate",
+             *flags],
+            name="agent",
+        ),
+        "task agent": Child(["-m", "skimesh", "task-agent", *flags], name="task agent"),
+    }  # fmt: skip
+    children = list(early.values())
+    try:
+        for who, child in early.items():
+            line = child.wait_stderr("waiting for the router", timeout=120)
+            assert f"skimesh: {who}: waiting for the router" in line, line
+        router = Child(["-m", "skimesh", "router", "--listen", endpoint], name="router")
+        children.append(router)
+        router.wait_stderr("router listening", timeout=60)
+        early["world model"].wait_stderr("world model ready", timeout=120)
+        early["agent r1"].wait_stderr("agent r1 ready", timeout=120)
+        early["task agent"].wait_stderr("task agent ready", timeout=120)
+        for child in children:
+            assert child.proc.poll() is None, child.log()
+        for child in early.values():
+            assert child.stop() == 0, child.log()
+    finally:
+        for child in reversed(children):
+            child.kill()
