@@ -112,16 +112,21 @@ async def test_a_dropped_part_is_detected(world: SimWorld) -> None:
         data.ctrl[model.actuator("r1/gripper").id] = 0.085  # and let go
 
     outcome: list[BaseException] = []
+    underway = anyio.Event()  # the part is dropped while the arm carries it, not before
+
+    def moved(fraction: float) -> None:
+        if fraction > 0.05:
+            underway.set()
 
     async def carry() -> None:
         try:
-            await arm.move_tcp(tool_down(part.x, part.y, z + 0.15), speed=0.05)
+            await arm.move_tcp(tool_down(part.x, part.y, z + 0.15), speed=0.05, progress=moved)
         except GraspLostError as exc:
             outcome.append(exc)
 
     async with anyio.create_task_group() as tg:
         tg.start_soon(carry)
-        await world.sleep(0.3)
+        await underway.wait()
         await world.call(drop)
     assert len(outcome) == 1 and "lost Gear-3" in str(outcome[0])
     assert (await gripper.state()).holding == ""
