@@ -119,21 +119,32 @@ class TaskView:
         if step in self.plan:
             self.plan[step].status = status
 
-    def render(self, now: float | None = None, height: int | None = None) -> RenderableType:
-        """The view at ``now``; with ``height`` (the terminal's lines), the rows that matter
-        most where not all fit: running and failed steps, then the next waiting ones, the
-        count of the others below."""
+    def render(
+        self, now: float | None = None, height: int | None = None, width: int | None = None
+    ) -> RenderableType:
+        """The view at ``now``. With ``height`` (the terminal's lines), the rows that matter
+        most where not all fit: robots in a step first, then the plan's failed and running
+        steps and the next waiting ones, the count of the others below; with ``width`` too,
+        counting the lines each plan row takes there (a long call wraps)."""
+        now = time.time() if now is None else now
+        if self.finished is not None:
+            now = self.finished.stamp
+        robots_room, plan_room = _room(height, len(self.robots), len(self.plan))
+        if height is not None and width is not None:
+            head = -(-(len(self.title) + 20) // max(1, width))  # a long goal wraps
+            free = height - robots_room - _CHROME - (head - 1)
+            ranked = sorted(self.plan.values(), key=lambda s: (_RANK[s.status], s.index))
+            plan_room = _rows_that_fit([s.call for s in ranked], width - _BESIDE_CALL, free)
+        return self._frame(now, robots_room, plan_room)
+
+    def _frame(self, now: float, robots_room: int, plan_room: int) -> RenderableType:
         from rich.console import Group
         from rich.table import Table
         from rich.text import Text
 
-        now = time.time() if now is None else now
-        if self.finished is not None:
-            now = self.finished.stamp
         elapsed = 0.0 if self.t0 is None else now - self.t0
         held = "  PAUSED" if self.paused else ""
         head = Text(f"{self.title}  ({elapsed:.1f} s){held}", style="bold")
-        robots_room, plan_room = _room(height, len(self.robots), len(self.plan))
         robots = Table(title="robots", title_justify="left", expand=False)
         for name in ("robot", "step", "skill", "phase", "done", "in step"):
             robots.add_column(name, overflow="fold")
@@ -171,6 +182,25 @@ def _robot_rank(item: tuple[str, _Robot]) -> tuple[int, list[str | int]]:
     name, robot = item
     rank = 0 if robot.ended is None else 1 if robot.phase.startswith("FAILED") else 2
     return rank, [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", name)]
+
+
+_CHROME = 13
+"""Lines of the view besides its robot and plan rows: the head, each table's title, borders
+and header, the line below, and one to spare."""
+_BESIDE_CALL = 36
+"""Columns of a plan row besides its call: the step, robot, after and status columns and
+the borders."""
+
+
+def _rows_that_fit(calls: list[str], width: int, lines: int) -> int:
+    """How many of ``calls`` (in the order kept) fit in ``lines`` when each wraps at
+    ``width`` columns; at least one."""
+    width, used = max(20, width), 0
+    for shown, call in enumerate(calls):
+        used += max(1, -(-len(call) // width))
+        if used > lines:
+            return max(1, shown)
+    return max(1, len(calls))
 
 
 def _room(height: int | None, robots: int, steps: int) -> tuple[int, int]:
@@ -216,7 +246,7 @@ async def follow_live(
     view = TaskView()
 
     def frame() -> RenderableType:
-        return view.render(height=console.size.height)
+        return view.render(height=console.size.height, width=console.size.width)
 
     with Live(get_renderable=frame, console=console, refresh_per_second=4):
         async for event in events:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from skimesh.commands._task_output import ProgressPrinter
 from task_agent.protocol import Planned, PlannedStep, StepProgress
+from wm_store.protocol import Value
 
 
 def test_plan_rows_name_elements_by_label_and_id() -> None:
@@ -153,6 +154,33 @@ def test_the_live_view_keeps_the_rows_that_matter_when_not_all_fit() -> None:
         view.render(now=4.0)
     )
     assert "not shown" not in out.getvalue()
+
+
+def test_the_live_view_fits_a_short_terminal_where_calls_wrap() -> None:
+    """Given the terminal's size, as many plan rows as fit its height at its width (a long
+    call takes several lines), the count of the others below; everything where it fits."""
+    import io
+
+    from rich.console import Console
+
+    from skimesh.commands._live import TaskView
+    from task_agent.protocol import StepStarted, TaskStarted
+
+    view = TaskView()
+    view.apply(TaskStarted(task_id="t-1", seq=1, stamp=0.0, goal="g"))
+    params: dict[str, Value] = {f"parameter_{k}": f"Element-{k}" for k in range(8)}  # wraps
+    steps = [PlannedStep(index=i, agent="r1", skill="pick", params=params) for i in range(10)]
+    view.apply(Planned(task_id="t-1", seq=2, stamp=0.0, steps=steps))
+    view.apply(StepStarted(task_id="t-1", seq=3, stamp=1.0, step=0, agent="r1", skill="pick",
+                           run_id="a"))  # fmt: skip
+    for height, shown in ((30, False), (200, True)):
+        out = io.StringIO()
+        console = Console(file=out, width=80, height=height, color_system=None)
+        console.print(view.render(now=2.0, height=height, width=80))
+        text = out.getvalue()
+        assert len(text.splitlines()) <= height, text
+        assert ("steps not shown" not in text) == shown, text
+        assert "running" in text
 
 
 def test_pause_and_resume_are_shown_in_lines_and_in_the_live_view() -> None:
