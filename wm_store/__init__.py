@@ -70,6 +70,7 @@ if TYPE_CHECKING:
     from ._client import WmClient as WmClient
     from ._describe import ChangeWords as ChangeWords
     from ._describe import describe_change as describe_change
+    from ._describe_values import value_text as value_text
     from ._registration import DeviceSpec as DeviceSpec
     from ._registration import RobotRegistration as RobotRegistration
     from ._registration import SkillSpec as SkillSpec
@@ -90,6 +91,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "WmClient": "._client",
         "ChangeWords": "._describe",
         "describe_change": "._describe",
+        "value_text": "._describe_values",
         "DeviceSpec": "._registration",
         "RobotRegistration": "._registration",
         "SkillSpec": "._registration",
@@ -147,5 +149,6 @@ __all__ = [
     "registration_ops",
     "transact_in_batches",
     "unregistration_ops",
+    "value_text",
     "wait_for_store",
 ]

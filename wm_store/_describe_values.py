@@ -1,5 +1,7 @@
-"""Property values in words, short: what :class:`~wm_store.ChangeWords` shows of a value that
-changed (``(1.078, -1.250, 0.720)`` for a pose, millimetre precision)."""
+"""Property values in words, short, the same wherever people read them: what
+:class:`~wm_store.ChangeWords` shows of a value that changed and what ``skimesh wm tree`` / ``ls``
+show of an element (``(1.078, -1.250, 0.720)`` for a pose, millimetre precision;
+``0.24x0.3x0.07 m`` for a size)."""
 
 from __future__ import annotations
 
@@ -70,11 +72,11 @@ def value_text(value: Value, name_of: Callable[[str], str] = str) -> str:
             at = _xyz(m[3], m[7], m[11]) if len(m) == 16 else f"{len(m)} numbers"
             return at + _in(frame, name_of)
         case SizeCuboid(x=x, y=y, z=z):
-            return f"{_number(x)} x {_number(y)} x {_number(z)}"
+            return f"{_number(x)}x{_number(y)}x{_number(z)} m"
         case SizeCylinder(radius=r, height=h):
-            return f"r {_number(r)} h {_number(h)}"
+            return f"cyl r={_number(r)} h={_number(h)} m"
         case SizeSphere(radius=r):
-            return f"r {_number(r)}"
+            return f"sphere r={_number(r)} m"
         case Color(r=r, g=g, b=b, a=a):
             return f"rgba({r:.2f}, {g:.2f}, {b:.2f}, {a:.2f})"
         case list():

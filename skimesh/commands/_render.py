@@ -1,27 +1,16 @@
-"""Text rendering of world-model content for the terminal (trees, element lines, values);
-elements are named by :func:`wm_store.display_name`."""
+"""Text rendering of world-model content for the terminal (trees, element lines); elements are
+named by :func:`wm_store.display_name`, values worded by :func:`wm_store.value_text`."""
 
 from __future__ import annotations
 
 import re
 from collections.abc import Iterable
 
-from wm_store import display_name
-from wm_store.protocol import (
-    Color,
-    Element,
-    Frame,
-    Orientation,
-    Pose,
-    Position,
-    SizeCuboid,
-    SizeCylinder,
-    SizeSphere,
-    Value,
-)
+from wm_store import display_name, value_text
+from wm_store.protocol import Element
 from wm_store.scene import SceneState, id_sort_key
 
-__all__ = ["element_line", "format_value", "plain_help", "render_tree"]
+__all__ = ["element_line", "plain_help", "render_tree"]
 
 _ROLE = re.compile(r":(?:func|class|mod|meth|data|attr):`~?([^`]+)`")
 
@@ -34,37 +23,6 @@ def plain_help(doc: str | None) -> str | None:
     return _ROLE.sub(r"`\1`", doc).replace("``", "`")
 
 
-def format_value(value: Value) -> str:
-    """A short human form of a property value."""
-    match value:
-        case Position(x=x, y=y, z=z):
-            return f"({x:.3f}, {y:.3f}, {z:.3f})"
-        case Orientation(x=x, y=y, z=z, w=w):
-            return f"quat({x:.3f}, {y:.3f}, {z:.3f}, {w:.3f})"
-        case Pose(position=p, frame=frame):
-            where = f" in {frame}" if frame else ""
-            return f"({p.x:.3f}, {p.y:.3f}, {p.z:.3f}){where}"
-        case Frame():
-            return "frame(4x4)"
-        case SizeCuboid(x=x, y=y, z=z):
-            return f"{x:g}x{y:g}x{z:g} m"
-        case SizeCylinder(radius=r, height=h):
-            return f"cyl r={r:g} h={h:g} m"
-        case SizeSphere(radius=r):
-            return f"sphere r={r:g} m"
-        case Color(r=r, g=g, b=b, a=a):
-            return f"rgba({r:g}, {g:g}, {b:g}, {a:g})"
-        case float():
-            return f"{value:g}"
-        case list():
-            return "[" + ", ".join(format_value(v) for v in value) + "]"
-        case str() if len(value) > 40:
-            return repr(value[:37] + "...")
-        case str():
-            return repr(value)
-    return str(value)
-
-
 _SHOWN = ("pose", "position", "size", "available", "doorOpen", "heating", "mass")
 
 
@@ -72,7 +30,7 @@ def element_line(element: Element, shown: Iterable[str] = _SHOWN) -> str:
     """``Pulley-4 (Gear-1) [Gear]  pose=...``: the element's name (:func:`wm_store.display_name`),
     its class and the ``shown`` properties it has."""
     props = " ".join(
-        f"{k}={format_value(element.properties[k])}" for k in shown if k in element.properties
+        f"{k}={value_text(element.properties[k])}" for k in shown if k in element.properties
     )
     return f"{display_name(element)} [{element.type}]" + (f"  {props}" if props else "")
 

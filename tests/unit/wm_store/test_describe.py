@@ -96,7 +96,7 @@ def test_several_properties_the_first_few_with_values_and_seen_for_observations(
     line = words(change(2, updated))
     assert line == (
         "rev 2 by r1: Gear-1 pose (1.078, -1.250, 0.720) -> unset, mass unset -> 0.12, "
-        "size unset -> 0.1 x 0.2 x 0.3, note, seen by r1-camera"
+        "size unset -> 0.1x0.2x0.3 m, note, seen by r1-camera"
     )
     turned = put(updated.element, properties={"mass": 0.2, "seenAt": 6.0})
     assert words(change(3, turned)) == "rev 3 by r1: Gear-1 mass 0.12 -> 0.2, seen"
