@@ -186,3 +186,19 @@ def start_worker(mode: str, endpoint: str, mesh: str, name: str, count: int) -> 
     )
     child.expect(lambda m: "ready" in m)
     return child
+
+
+def command_imports(argv: Sequence[str], modules: Sequence[str]) -> tuple[int, list[str]]:
+    """Run ``skimesh ARGV`` in a fresh interpreter; its exit code and which of ``modules`` it
+    imported."""
+    probe = (
+        "import sys\n"
+        "from skimesh.cli import main\n"
+        f"code = main({list(argv)!r})\n"
+        f"print(code, [m for m in {tuple(modules)!r} if m in sys.modules], file=sys.stderr)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT
+    )
+    code, loaded = done.stderr.strip().splitlines()[-1].split(" ", 1)
+    return int(code), json.loads(loaded.replace("'", '"'))

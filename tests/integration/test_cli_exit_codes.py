@@ -18,7 +18,7 @@ import pytest
 
 from skimesh.errors import Exit
 
-from .procs import ROOT, Child
+from .procs import ROOT, Child, command_imports
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -167,18 +167,9 @@ HEAVY = ("unified_planning", "mujoco", "placo", "rerun", "rdflib")
 def test_light_commands_on_a_mesh_load_no_heavy_package(site: list[str], command: str) -> None:
     """The light commands, answered by the mesh, import neither the planners, the simulator,
     the viewer nor rdflib (``wm get`` and ``agents`` ask the store, they load no replica)."""
-    probe = (
-        "import sys\n"
-        "from skimesh.cli import main\n"
-        f"code = main({[*command.split(), *site]!r})\n"
-        f"print(code, [m for m in {HEAVY!r} if m in sys.modules], file=sys.stderr)"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT
-    )
-    code, loaded = done.stderr.strip().splitlines()[-1].split(" ", 1)
-    assert loaded == "[]", done.stderr
-    assert int(code) == (Exit.REFUSED if "t-nothing" in command else Exit.OK), done.stderr
+    code, loaded = command_imports([*command.split(), *site], HEAVY)
+    assert loaded == [], loaded
+    assert code == (Exit.REFUSED if "t-nothing" in command else Exit.OK)
 
 
 def test_the_simulator_starts_and_stops_cleanly(module_router: str, tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from .procs import ROOT, Child
+from .procs import ROOT, Child, command_imports
 
 pytestmark = [pytest.mark.zenoh, pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -92,13 +92,4 @@ def test_a_simulated_outcome_agent_is_light(store: list[str]) -> None:
 def test_commands_with_a_replica_load_no_rdflib(store: list[str], command: str) -> None:
     """The commands that keep a world-model replica check against the store's compiled
     ontology: no rdflib in the process."""
-    probe = (
-        "import sys\n"
-        "from skimesh.cli import main\n"
-        f"code = main({[*command.split(), *store]!r})\n"
-        f"print(code, [m for m in {HEAVY!r} if m in sys.modules], file=sys.stderr)"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT
-    )
-    assert done.stderr.strip().splitlines()[-1] == "0 []", done.stderr
+    assert command_imports([*command.split(), *store], HEAVY) == (0, [])
