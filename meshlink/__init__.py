@@ -4,6 +4,7 @@ Start with :func:`open_mesh` (a :class:`MeshConfig` in, a :class:`Mesh` out); ke
 ``mesh.keys`` (:class:`KeySpace`). Every error derives from :class:`MeshlinkError`.
 """
 
+from ._backoff import Backoff
 from ._config import (
     DEFAULT_ROUTER_ENDPOINT,
     MeshConfig,
@@ -41,6 +42,7 @@ from ._subscription import Subscription
 __all__ = [
     "DEFAULT_ROUTER_ENDPOINT",
     "Answer",
+    "Backoff",
     "ConfigError",
     "Handler",
     "IncomingQuery",

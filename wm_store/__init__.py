@@ -80,8 +80,8 @@ if TYPE_CHECKING:
     from ._replica import ReplicaStats as ReplicaStats
     from ._transport import InMemoryTransport as InMemoryTransport
     from ._transport import WmTransport as WmTransport
-    from ._transport import wait_for_store as wait_for_store
     from ._zenoh_transport import ZenohTransport as ZenohTransport
+    from ._zenoh_transport import wait_for_store as wait_for_store
     from .scene._names import display_name as display_name
 
 __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and their modules
@@ -101,7 +101,7 @@ __getattr__ = lazy_getattr(  # the names imported on first use (PEP 562), and th
         "ReplicaStats": "._replica",
         "InMemoryTransport": "._transport",
         "WmTransport": "._transport",
-        "wait_for_store": "._transport",
+        "wait_for_store": "._zenoh_transport",
         "ZenohTransport": "._zenoh_transport",
         "display_name": ".scene._names",
     },

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
 from typing import TYPE_CHECKING, Protocol
 
@@ -24,13 +24,13 @@ import anyio
 
 from meshlink.rpc import encode
 from meshlink.rpc import raise_for_error as raise_remote_error
-from wm_store._errors import WM_CODES, TransportError, remote_error
-from wm_store.protocol import Change, GetElements, Reply, Request, decode_change, decode_reply
+from wm_store._errors import WM_CODES, remote_error
+from wm_store.protocol import Change, Reply, Request, decode_change, decode_reply
 
 if TYPE_CHECKING:
     from wm_store.server import WmService
 
-__all__ = ["InMemoryTransport", "WmTransport", "raise_for_error", "wait_for_store"]
+__all__ = ["InMemoryTransport", "WmTransport", "raise_for_error"]
 
 _log = logging.getLogger(__name__)
 
@@ -52,33 +52,6 @@ def raise_for_error(reply: Reply) -> Reply:
     :data:`~wm_store._errors.WM_CODES`); return any other reply."""
     raise_remote_error(reply, WM_CODES, fallback=remote_error)
     return reply
-
-
-async def wait_for_store(
-    transport: WmTransport,
-    *,
-    timeout: float = 5.0,
-    say: Callable[[float, TransportError], None] | None = None,
-    every: float = 30.0,
-) -> float:
-    """Wait until the store answers a request: a service started before the store (or while
-    it restarts) waits for it instead of failing. ``say(waited, error)`` is called when the
-    wait begins and every ``every`` seconds after; returns the seconds waited. Cancel it
-    (Ctrl-C, a deadline) to stop waiting."""
-    began = anyio.current_time()
-    said_at = -math.inf
-    pause = 0.2
-    while True:
-        try:
-            await transport.request(GetElements(ids=[]), timeout=timeout)
-            return anyio.current_time() - began
-        except TransportError as e:
-            waited = anyio.current_time() - began
-            if say is not None and waited - said_at >= every:
-                say(waited, e)
-                said_at = waited
-        await anyio.sleep(pause)  # a store that is not there gives no event to wait on
-        pause = min(2.0, pause * 2)
 
 
 class InMemoryTransport:

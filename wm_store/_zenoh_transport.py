@@ -5,21 +5,31 @@ they name no author, or one that is no key segment), every read on the read-only
 
 It raises :class:`~wm_store.TransportError` when the store cannot be reached and returns an
 error reply as is (the client turns it into the matching :class:`~wm_store.WmError` subclass).
+:func:`wait_for_store` waits until a store answers (a service started before it).
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 
-from meshlink import InvalidKeyError, Mesh, MeshlinkError, NoReplyError
+from meshlink import Backoff, InvalidKeyError, Mesh, MeshlinkError, NoReplyError
 from meshlink import RemoteError as MeshRemoteError
 from meshlink.rpc import WireError, encode
 from wm_store._errors import ProtocolError, TransportError
-from wm_store.protocol import Change, Reply, Request, Transact, decode_change, decode_reply
+from wm_store._transport import WmTransport
+from wm_store.protocol import (
+    Change,
+    GetElements,
+    Reply,
+    Request,
+    Transact,
+    decode_change,
+    decode_reply,
+)
 
-__all__ = ["ZenohTransport"]
+__all__ = ["ZenohTransport", "wait_for_store"]
 
 _log = logging.getLogger(__name__)
 
@@ -73,3 +83,25 @@ async def _decode_changes(samples: AsyncIterator[object]) -> AsyncIterator[Chang
             _log.warning("skipped an undecodable change: %s", exc)
             continue
         yield change
+
+
+async def wait_for_store(
+    transport: WmTransport,
+    *,
+    timeout: float = 5.0,
+    say: Callable[[float, TransportError], None] | None = None,
+    every: float = 30.0,
+) -> float:
+    """Wait until the store answers a request: a service started before the store (or while
+    it restarts) waits for it instead of failing. ``say(waited, error)`` is called when the
+    wait begins and every ``every`` seconds after; returns the seconds waited. Cancel it
+    (Ctrl-C, a deadline) to stop waiting."""
+    backoff = Backoff(0.2, 2.0, every=every)
+    while True:
+        try:
+            await transport.request(GetElements(ids=[]), timeout=timeout)
+            return backoff.waited
+        except TransportError as e:
+            if say is not None and backoff.due():
+                say(backoff.waited, e)
+        await backoff.wait()

@@ -13,7 +13,7 @@ import anyio
 import msgspec
 from anyio.abc import TaskStatus
 
-from meshlink import Mesh
+from meshlink import Backoff, Mesh
 from skill_agent._errors import SkillLoadError
 from skill_agent.protocol._skills import SkillDescription
 from skill_agent.runtime._agent import AgentCore
@@ -194,10 +194,9 @@ async def _late_devices(
 ) -> None:
     """Bind the devices of ``config`` served after the agent started (see :func:`serve_agent`)."""
     expected = list(dict.fromkeys([*(d.label for d in config.devices), *config.hardware.values()]))
-    pause = 1.0
+    backoff = Backoff(1.0, LATE_POLL_MAX)
     while missing := [label for label in expected if label not in drivers]:
-        await anyio.sleep(pause)  # a device server that is not there gives no event
-        pause = min(LATE_POLL_MAX, pause * 2)
+        await backoff.wait()
         found = {k: v for k, v in (await find(missing)).items() if k in missing}
         if not found:
             continue

@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 from collections.abc import AsyncIterator
 from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
 
-import anyio
-
-from meshlink import Mesh, MeshConfig, SessionError, mesh_config_from_args, open_mesh
+from meshlink import Backoff, Mesh, MeshConfig, SessionError, mesh_config_from_args, open_mesh
 from wm_store import TransportError, WmClient, ZenohTransport, wait_for_store
 
 from ..errors import UsageError
@@ -41,8 +38,7 @@ async def service_mesh(
     router: a port in use) fails at once."""
     if isinstance(config, argparse.Namespace):
         config = mesh_config_from_args(config)
-    began = anyio.current_time()
-    said_at, pause = -math.inf, 0.5
+    backoff = Backoff(0.5, ROUTER_POLL_MAX, every=every)
     async with AsyncExitStack() as stack:
         while True:
             try:
@@ -51,14 +47,13 @@ async def service_mesh(
             except SessionError as e:
                 if config.mode != "client" or config.listen:
                     raise
-                waited = anyio.current_time() - began
-                if waited - said_at >= every:
-                    said_at = waited
-                    _log.info("%s: waiting for the router (%.0f s so far): %s", who, waited, e)
-            await anyio.sleep(pause)  # a router that is not there gives no event to wait on
-            pause = min(ROUTER_POLL_MAX, pause * 2)
-        if said_at > -math.inf:
-            _log.info("%s: the router answers (after %.0f s)", who, anyio.current_time() - began)
+                if backoff.due():
+                    _log.info(
+                        "%s: waiting for the router (%.0f s so far): %s", who, backoff.waited, e
+                    )
+            await backoff.wait()
+        if backoff.said:
+            _log.info("%s: the router answers (after %.0f s)", who, backoff.waited)
         yield mesh
 
 
