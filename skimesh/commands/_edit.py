@@ -30,6 +30,7 @@ from wm_store.protocol import (
 
 from ..runtime import run_service
 from ._connect import wm_session
+from ._store_reads import element_ids
 
 __all__ = ["Body", "add_edit_commands", "client", "parse_assignments"]
 
@@ -48,7 +49,12 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
     add.add_argument("type", help="its class, e.g. Gear")
     add.add_argument("--label", default="", help="its label (unique in the scene)")
     add.add_argument("--set", action="append", default=[], metavar="PROP=VALUE", help=_VALUES)
-    add.add_argument("--in", dest="parent", metavar="ID", help="its spatial parent")
+    add.add_argument(
+        "--in",
+        dest="parent",
+        metavar="ID",
+        help="its spatial parent (an id, or a label only it has)",
+    )
     add.add_argument(
         "--relation", default="contain", help="how the parent holds it (default: contain)"
     )
@@ -60,7 +66,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
         description="Merge properties into an element (`--set`), remove some (`--unset`), "
         "relabel it (`--label`), e.g. `skimesh wm update Gear-1 --set mass=0.2`.",
     )
-    upd.add_argument("id", help="the element, e.g. Gear-1")
+    upd.add_argument("id", help="the element: its id (Gear-1) or a label only it has")
     upd.add_argument("--set", action="append", default=[], metavar="PROP=VALUE", help=_VALUES)
     upd.add_argument("--unset", action="append", default=[], metavar="PROP", help="remove it")
     upd.add_argument("--label", default=None, help="a new label")
@@ -71,7 +77,7 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
         help="remove an element",
         description="Remove an element (`--branch`: with everything it spatially holds).",
     )
-    rm.add_argument("id", help="the element, e.g. Gear-1")
+    rm.add_argument("id", help="the element: its id (Gear-1) or a label only it has")
     rm.add_argument("--branch", action="store_true", help="with everything it holds")
     rm.set_defaults(func=lambda a: client(a, _remove))
 
@@ -82,9 +88,9 @@ def add_edit_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser])
             description=f"{verb.capitalize()} a relation, e.g. `skimesh wm {name} KitBox-1 "
             "contain Gear-1` (a spatial relation moves the object in the scene tree).",
         )
-        rel.add_argument("subject", help="an element id")
+        rel.add_argument("subject", help="an element: its id or a label only it has")
         rel.add_argument("predicate", help="a relation of the ontology, e.g. contain")
-        rel.add_argument("object", help="an element id")
+        rel.add_argument("object", help="an element: its id or a label only it has")
         rel.set_defaults(func=lambda a, n=name: client(a, _relate if n == "relate" else _unrelate))
 
     watch = cmds.add_parser(
@@ -131,8 +137,14 @@ def client(args: argparse.Namespace, body: Body) -> int:
     return run_service(main)
 
 
+def _id(wm: WmClient, name: str) -> str:
+    """The element ``name`` gives: an id, or a label only one element has."""
+    return element_ids([name], wm.replica.state.elements.values())[0]
+
+
 async def _add(args: argparse.Namespace, wm: WmClient) -> int:
-    relations = [Relation(args.parent, args.relation, "$")] if args.parent else []
+    parent = _id(wm, args.parent) if args.parent else ""
+    relations = [Relation(parent, args.relation, "$")] if parent else []
     op = AddElement(
         type=args.type,
         label=args.label,
@@ -149,29 +161,32 @@ async def _update(args: argparse.Namespace, wm: WmClient) -> int:
     properties = parse_assignments(args.set)
     if not (properties or args.unset or args.label is not None):
         raise SystemExit("nothing to change: give --set, --unset or --label")
-    revision = await wm.update_element(args.id, properties, remove=args.unset, label=args.label)
-    print(f"{display_name(wm.find_element(args.id), args.id)} updated at revision {revision}")
+    eid = _id(wm, args.id)
+    revision = await wm.update_element(eid, properties, remove=args.unset, label=args.label)
+    print(f"{display_name(wm.find_element(eid), eid)} updated at revision {revision}")
     return 0
 
 
 async def _remove(args: argparse.Namespace, wm: WmClient) -> int:
-    name = display_name(wm.find_element(args.id), args.id)
+    eid = _id(wm, args.id)
+    name = display_name(wm.find_element(eid), eid)
     if args.branch:
-        revision = await wm.remove_branch(args.id)
+        revision = await wm.remove_branch(eid)
     else:
-        revision = await wm.remove_element(args.id)
+        revision = await wm.remove_element(eid)
     print(f"{name} removed at revision {revision}")
     return 0
 
 
 async def _relate(args: argparse.Namespace, wm: WmClient) -> int:
-    revision = await wm.set_relation(args.subject, args.predicate, args.object)
+    revision = await wm.set_relation(_id(wm, args.subject), args.predicate, _id(wm, args.object))
     print(f"{args.predicate}({args.subject}, {args.object}) set at revision {revision}")
     return 0
 
 
 async def _unrelate(args: argparse.Namespace, wm: WmClient) -> int:
-    revision = await wm.unset_relation(args.subject, args.predicate, args.object)
+    subject, obj = _id(wm, args.subject), _id(wm, args.object)
+    revision = await wm.unset_relation(subject, args.predicate, obj)
     print(f"{args.predicate}({args.subject}, {args.object}) unset at revision {revision}")
     return 0
 

@@ -1,9 +1,11 @@
 """Reads from the world-model store without a replica: a command that shows a few elements asks
-the store for them (no snapshot of the whole world, no ontology to load: start-up time)."""
+the store for them (no snapshot of the whole world, no ontology to load: start-up time). And
+how a command names an element: its id or a label only it has (:func:`element_ids`)."""
 
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterable
 
 from meshlink import Mesh
 from wm_store import ElementNotFoundError, RemoteError, WmError, ZenohTransport
@@ -19,7 +21,7 @@ from wm_store.protocol import (
 )
 from wm_store.scene import id_sort_key
 
-__all__ = ["elements_by_name", "registered_agents"]
+__all__ = ["element_ids", "elements_by_name", "registered_agents"]
 
 
 async def elements_by_name(mesh: Mesh, names: list[str], *, timeout: float) -> list[Element]:
@@ -37,14 +39,14 @@ async def elements_by_name(mesh: Mesh, names: list[str], *, timeout: float) -> l
         return reply.elements
     listing = await transport.request(Resolve(query=Query()), timeout=timeout)
     known = listing.elements if isinstance(listing, ElementsReply) else []
-    ids = _by_label(names, known)
-    if ids is not None and ids != names:
-        reply = await transport.request(GetElements(ids=ids), timeout=timeout)
-        if isinstance(reply, ElementsReply):
-            return reply.elements
-    if not known or ids is not None:  # the store's own error
-        raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
-    raise ElementNotFoundError("; ".join(_unknown(names, known)))
+    if known:
+        ids = element_ids(names, known)  # or ElementNotFoundError
+        if ids != names:
+            reply = await transport.request(GetElements(ids=ids), timeout=timeout)
+            if isinstance(reply, ElementsReply):
+                return reply.elements
+    # the store's own error (an ACL, a fault)
+    raise RemoteError(getattr(reply, "code", "?"), getattr(reply, "message", str(reply)))
 
 
 async def registered_agents(mesh: Mesh, *, timeout: float) -> dict[str, dict[str, object]]:
@@ -73,35 +75,28 @@ async def registered_agents(mesh: Mesh, *, timeout: float) -> dict[str, dict[str
     }
 
 
-def _by_label(names: list[str], known: list[Element]) -> list[str] | None:
-    """Each name as an id: itself where it is one, else the id of the one element it labels;
-    None when a name is neither, or labels several elements."""
-    ids = {e.id for e in known}
-    out = []
-    for name in names:
-        labelled = [e.id for e in known if e.label == name]
-        if name in ids:
-            out.append(name)
-        elif len(labelled) == 1:
-            out.append(labelled[0])
-        else:
-            return None
-    return out
+def element_ids(names: Iterable[str], known: Iterable[Element]) -> list[str]:
+    """The id of each of ``names``: itself where it is an id of ``known``, else the id of the
+    one element it labels.
 
-
-def _unknown(names: list[str], known: list[Element]) -> list[str]:
-    """Why each name that is neither an id nor a unique label is refused, with the closest
-    ids and labels."""
-    ids = {e.id for e in known}
-    said = []
+    Raises:
+        ElementNotFoundError: a name is neither, or labels several elements (naming them);
+            with the closest ids and labels.
+    """
+    elements = list(known)
+    ids = {e.id for e in elements}
+    out: list[str] = []
+    said: list[str] = []
     for name in names:
-        labelled = sorted((e.id for e in known if e.label == name), key=id_sort_key)
+        labelled = sorted((e.id for e in elements if e.label == name), key=id_sort_key)
         if name in ids or len(labelled) == 1:
-            continue
-        if labelled:
+            out.append(name if name in ids else labelled[0])
+        elif labelled:
             said.append(f"{len(labelled)} elements are labelled {name!r}: give one's id "
                         f"({', '.join(labelled)})")  # fmt: skip
-            continue
-        names_known = sorted(ids | {e.label for e in known if e.label})
-        said.append(f"no element {name!r} in the world model{did_you_mean(name, names_known)}")
-    return said
+        else:
+            everything = sorted(ids | {e.label for e in elements if e.label})
+            said.append(f"no element {name!r} in the world model{did_you_mean(name, everything)}")
+    if said:
+        raise ElementNotFoundError("; ".join(said))
+    return out

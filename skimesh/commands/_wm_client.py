@@ -20,11 +20,9 @@ import msgspec
 
 from meshlink import add_mesh_arguments
 from wm_store import (
-    ElementNotFoundError,
     WmClient,
     transact_in_batches,
 )
-from wm_store.ontology import did_you_mean
 from wm_store.protocol import (
     Element,
     PropertyFilter,
@@ -37,7 +35,7 @@ from ..runtime import run_service
 from ._connect import mesh_session, wm_session
 from ._edit import add_edit_commands
 from ._render import element_line, render_tree
-from ._store_reads import elements_by_name
+from ._store_reads import element_ids, elements_by_name
 from ._teach import add_ontology_commands
 
 __all__ = ["add_client_commands"]
@@ -117,7 +115,12 @@ def _add_read_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser]
         "spatial parent (or from ROOT).",
         json_help="print the tree as nested objects {id, type, label, relation, children}",
     )
-    tree.add_argument("root", nargs="?", metavar="ROOT", help="start from this element id")
+    tree.add_argument(
+        "root",
+        nargs="?",
+        metavar="ROOT",
+        help="start from this element (an id, or a label only it has)",
+    )
     tree.set_defaults(func=lambda a: _client(a, lambda wm: _print_tree(a, wm)))
 
     query = _command(
@@ -225,13 +228,10 @@ def _add_write_commands(cmds: argparse._SubParsersAction[argparse.ArgumentParser
     scen.set_defaults(func=_import_scenario)
 
 
-def _element(wm: WmClient, element_id: str) -> Element:
-    """The element ``element_id``, or ElementNotFoundError naming the closest ids."""
-    found = wm.find_element(element_id)
-    if found is None:
-        hint = did_you_mean(element_id, wm.replica.state.elements)
-        raise ElementNotFoundError(f"no element {element_id!r} in the world model{hint}")
-    return found
+def _element(wm: WmClient, name: str) -> Element:
+    """The element ``name`` gives (an id or a label only it has), or ElementNotFoundError
+    naming the closest ids and labels."""
+    return wm.get_element(element_ids([name], wm.replica.state.elements.values())[0])
 
 
 def _get(args: argparse.Namespace) -> int:
@@ -269,11 +269,10 @@ async def _print_json(obj: object) -> int:
 
 async def _print_tree(args: argparse.Namespace, wm: WmClient) -> int:
     state = wm.replica.state
-    if args.root:
-        _element(wm, args.root)
+    roots = [_element(wm, args.root).id] if args.root else None
     if args.json:
-        return await _write_json(_tree_json(state, [args.root] if args.root else None))
-    print(render_tree(state, [args.root] if args.root else None))
+        return await _write_json(_tree_json(state, roots))
+    print(render_tree(state, roots))
     return 0
 
 

@@ -32,6 +32,9 @@ ON_THE_MESH: list[tuple[str, Exit, str]] = [
     ("wm ls Gaer", Exit.REFUSED, "did you mean 'Gear'"),
     ("wm query Gear --label nothing-like-this", Exit.FAILED, ""),
     ("wm update Gear-1", Exit.REFUSED, "nothing to change"),
+    ("wm update r1-amr --set mass=1", Exit.REFUSED, "did you mean 'r1-arm'"),
+    ("wm relate r1 contain Gear-2", Exit.REFUSED, "2 elements are labelled 'r1'"),
+    ("wm tree r1-arm", Exit.OK, "r1-arm (Arm-1) [Arm]"),
     ("agents", Exit.OK, ""),
     ("run r1 pik", Exit.REFUSED, "did you mean 'pick'"),
     (

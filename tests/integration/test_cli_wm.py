@@ -307,7 +307,7 @@ def test_writes_watch_and_history_from_the_command_line(
 
         steps = [
             ("update", gear_id, "--set", "mass=0.2", "--label", "gear-y"),
-            ("relate", box_id, "near", gear_id),
+            ("relate", "bin-a", "near", "gear-y"),  # by label: a label only it has
             ("unrelate", box_id, "near", gear_id),
         ]
         for step in steps:
@@ -333,7 +333,7 @@ def test_writes_watch_and_history_from_the_command_line(
         assert history.returncode == 0 and len(lines) == 4, history.stdout
         assert lines[0].startswith("rev 2 by cli: +gear-z") and "+near" in lines[2]
         assert lines[1] == updated, "history learns the gear from revision 2"
-        removed = skimesh("wm", *common, "remove", box_id, "--branch")
+        removed = skimesh("wm", *common, "remove", "bin-a", "--branch")
         assert removed.returncode == 0, removed.stderr
         assert skimesh("wm", *common, "get", gear_id).returncode != 0, "removed with its box"
     finally:
